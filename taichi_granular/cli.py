@@ -1,0 +1,129 @@
+"""``taichi-granular``: run | describe | validate | bench (thin: parsing and printing only)."""
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from .config import ConfigError, load_scene
+
+
+def _default_out(scene) -> Path:
+    return Path(scene.run.output_dir) if scene.run.output_dir else Path("output") / scene.name
+
+
+def cmd_run(args) -> int:
+    from .simulation import Simulation
+
+    scene = load_scene(args.scene, args.set)
+    out = Path(args.out) if args.out else _default_out(scene)
+    sim = Simulation(scene, out_dir=out, profile=args.profile, progress=not args.quiet)
+    print(f"{scene.name}: {sim.state.n_material} material + {sim.state.n_wall} wall particles, "
+          f"{scene.dimension}D, {scene.arch}/{scene.precision}; output -> {out}")
+    summary = sim.run(end_time=args.end_time)
+    print(f"done: t = {summary.time:.4g} s in {summary.steps} steps, {summary.wall_seconds:.1f} s wall, "
+          f"{summary.particle_steps_per_second:.3g} particle-steps/s, {summary.frames} frames")
+    if args.profile:
+        print(sim.profiler.table())
+    return 0
+
+
+def cmd_describe(args) -> int:
+    from . import runtime
+    from .scheme import Scheme
+
+    scene = load_scene(args.scene, args.set)
+    runtime.init("cpu", scene.precision)  # describing allocates, never runs: any arch will do
+    scheme = Scheme(scene)
+    state = scheme.state
+    print(f"scene {scene.name}: {scene.dimension}D, model {scene.material.model}, arch {scene.arch}, "
+          f"precision {scene.precision}")
+    print(f"particles: {state.n_material} material + {state.n_wall} wall")
+    print(f"smoothing: {scheme.smoothing.describe()}; integrator: {scene.numerics.integrator}; "
+          f"walls: {scheme.walls.name}; periodic: {list(scene.domain.periodic) or 'none'}")
+    print("one time step:")
+    for k, line in enumerate(scheme.stage_list(), 1):
+        print(f"  {k:2d}. {line}")
+    itemsize = 8 if scene.precision == "f64" else 4
+    print("fields:")
+    for name, scope, shape, nbytes in state.memory_table(itemsize):
+        print(f"  {name:<18} {scope:<9} {shape:<7} {nbytes / 1024:10.1f} KiB")
+    print(f"  {'neighbour grid':<36} {scheme.grid.memory_bytes() / 1024:10.1f} KiB")
+    print(f"total field memory: {scheme.memory_bytes() / 2**20:.2f} MiB")
+    scheme.evaluate_rates()
+    print(f"estimated time step: {scheme.stable_time_step():.3g} s")
+    return 0
+
+
+def cmd_validate(args) -> int:
+    if args.case == "inclined-plane":
+        from .validation.cli import validate_inclined_plane
+        return validate_inclined_plane(args)
+    raise AssertionError(args.case)
+
+
+def cmd_bench(args) -> int:
+    if args.study == "throughput":
+        from .bench.throughput import main as throughput
+        return throughput(args)
+    raise AssertionError(args.study)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="taichi-granular", description=__doc__)
+    sub = parser.add_subparsers(dest="command", required=True)
+
+    def scene_args(p):
+        p.add_argument("scene", help="YAML scene file")
+        p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                       help="override a scene key, e.g. --set numerics.cfl=0.3 (repeatable)")
+
+    p = sub.add_parser("run", help="run a scene: VTU frames, diagnostics.csv, resolved config")
+    scene_args(p)
+    p.add_argument("--out", help="output directory (default: run.output_dir or output/<name>)")
+    p.add_argument("--end-time", type=float, help="override run.end_time [s]")
+    p.add_argument("--profile", action="store_true", help="time every stage and print the profile")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.set_defaults(func=cmd_run)
+
+    p = sub.add_parser("describe", help="stage list, fields and memory, time step; runs nothing")
+    scene_args(p)
+    p.set_defaults(func=cmd_describe)
+
+    p = sub.add_parser("validate", help="run a validation case and print its errors")
+    p.add_argument("case", choices=["inclined-plane"])
+    p.add_argument("--config", help="scene file (default: the bundled one)")
+    p.add_argument("--out", help="output directory (default: output/validate/<case>)")
+    p.add_argument("--reuse", action="store_true", help="evaluate existing output instead of running")
+    p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="override a scene key")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.set_defaults(func=cmd_validate)
+
+    p = sub.add_parser("bench", help="benchmarks (timing lives here, never in tests)")
+    p.add_argument("study", choices=["throughput"])
+    p.add_argument("--sizes", type=int, nargs="+", default=[10_000, 40_000, 160_000],
+                   help="approximate particle counts")
+    p.add_argument("--steps", type=int, default=50, help="timed steps per size")
+    p.add_argument("--arch", default="cpu")
+    p.add_argument("--precision", default="f64", choices=["f32", "f64"])
+    p.set_defaults(func=cmd_bench)
+    return parser
+
+
+def main(argv=None) -> int:
+    args = build_parser().parse_args(argv)
+    try:
+        return args.func(args)
+    except ConfigError as err:
+        print(f"error in scene: {err}", file=sys.stderr)
+        return 2
+    except FileNotFoundError as err:
+        print(f"error: {err}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("\ninterrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

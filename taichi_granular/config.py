@@ -1,0 +1,502 @@
+"""YAML scene -> validated, frozen dataclasses.
+
+Every key of a scene is declared exactly once here, with its default and a one-line meaning
+(``doc``) and unit. Loading checks everything before any Taichi field exists: unknown keys
+(with a close-match suggestion), missing keys, wrong types, vectors of the wrong length and
+physically impossible values all raise :class:`ConfigError` naming the key path, e.g.
+``material.solid_fraction_min``.
+
+Material models register their parameter class in :data:`MATERIALS`; the ``material.model``
+key picks one.
+"""
+from __future__ import annotations
+
+import dataclasses
+import difflib
+import math
+import typing
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Literal, Optional, Tuple, Union
+
+import yaml
+
+AXES = ("x", "y", "z")
+
+
+class ConfigError(ValueError):
+    """A scene file error, naming the key path it concerns."""
+
+    def __init__(self, path: str, message: str):
+        self.path = path
+        super().__init__(f"{path}: {message}" if path else message)
+
+
+def _key(doc: str, default: Any = dataclasses.MISSING, unit: str = "") -> Any:
+    """Declare a scene key: its default (none = required), meaning and SI unit."""
+    meta = {"doc": doc, "unit": unit}
+    if isinstance(default, (list, dict)):
+        raise TypeError("use tuples for defaults")
+    return field(default=default, metadata=meta)
+
+
+def _positive(path: str, value: float, what: str = "must be > 0") -> None:
+    if not (value > 0 and math.isfinite(value)):
+        raise ConfigError(path, f"{what}, got {value!r}")
+
+
+# --------------------------------------------------------------------------------------------
+# Sections
+# --------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True, kw_only=True)
+class Domain:
+    """Axis-aligned box holding every particle (walls included)."""
+
+    lower: Tuple[float, ...] = _key("lower corner of the box", unit="m")
+    upper: Tuple[float, ...] = _key("upper corner of the box", unit="m")
+    periodic: Tuple[str, ...] = _key("periodic axes, e.g. [x]", ())
+
+    def check(self, path: str, dim: int) -> None:
+        _check_vector(f"{path}.lower", self.lower, dim)
+        _check_vector(f"{path}.upper", self.upper, dim)
+        for a, (lo, hi) in enumerate(zip(self.lower, self.upper)):
+            if not hi > lo:
+                raise ConfigError(f"{path}.upper", f"upper[{a}]={hi} must exceed lower[{a}]={lo}")
+        for name in self.periodic:
+            if name not in AXES[:dim]:
+                raise ConfigError(f"{path}.periodic", f"unknown axis {name!r}; use {list(AXES[:dim])}")
+        if len(set(self.periodic)) != len(self.periodic):
+            raise ConfigError(f"{path}.periodic", "axis listed twice")
+
+    @property
+    def periodic_mask(self) -> Tuple[bool, ...]:
+        return tuple(ax in self.periodic for ax in AXES[: len(self.lower)])
+
+    @property
+    def size(self) -> Tuple[float, ...]:
+        return tuple(hi - lo for lo, hi in zip(self.lower, self.upper))
+
+
+@dataclass(frozen=True, kw_only=True)
+class Gravity:
+    """Gravity of the given magnitude, tilted from -y (2D) or -z (3D) towards +x.
+
+    A tilt of theta models a slope of angle theta whose down-slope direction is +x and
+    whose bed normal is the vertical axis of the domain.
+    """
+
+    magnitude: float = _key("magnitude of gravitational acceleration", 9.81, "m/s^2")
+    tilt_deg: float = _key("slope angle: tilt of gravity towards +x", 0.0, "deg")
+
+    def check(self, path: str) -> None:
+        if not (self.magnitude >= 0 and math.isfinite(self.magnitude)):
+            raise ConfigError(f"{path}.magnitude", f"must be >= 0, got {self.magnitude}")
+        if not -90.0 < self.tilt_deg < 90.0:
+            raise ConfigError(f"{path}.tilt_deg", f"must lie in (-90, 90) degrees, got {self.tilt_deg}")
+
+    def vector(self, dim: int) -> Tuple[float, ...]:
+        t = math.radians(self.tilt_deg)
+        g = [0.0] * dim
+        g[0] = self.magnitude * math.sin(t)
+        g[dim - 1] = -self.magnitude * math.cos(t)
+        return tuple(g)
+
+
+@dataclass(frozen=True, kw_only=True)
+class MuIMaterial:
+    """mu(I) rheology with compressible grains, Minatti & Paris (2015), MODEL.md section 1."""
+
+    model: Literal["mu_i"] = _key("constitutive model")
+    grain_density: float = _key("rho_s0, density of the grain material at zero pressure", unit="kg/m^3")
+    grain_diameter: float = _key("d0, grain diameter at zero pressure", unit="m")
+    static_friction_deg: float = _key("arctan(mu_s), static friction angle [M7]", unit="deg")
+    limit_friction_deg: float = _key("arctan(mu_2), limiting friction angle at large I [M7]", unit="deg")
+    reference_inertial_number: float = _key("I_0 of [M7]", unit="-")
+    solid_fraction_max: float = _key("phi_max, solid fraction at I = 0 [M8]", 0.6, "-")
+    solid_fraction_min: float = _key("phi_min, solid fraction at I = 1 [M8]", 0.5, "-")
+    grain_compressibility: float = _key("K_t, artificial grain compressibility [M41]", unit="1/Pa")
+    max_yield_stress: float = _key("tau_0, largest yield stress expected [M53]", unit="Pa")
+    regularisation_time: float = _key("m_0, regularisation parameter [M48], [M55]", 1.0, "s")
+
+    def check(self, path: str) -> None:
+        _positive(f"{path}.grain_density", self.grain_density)
+        if not 100.0 <= self.grain_density <= 25000.0:
+            raise ConfigError(f"{path}.grain_density",
+                              f"{self.grain_density} is not a plausible grain density in kg/m^3")
+        _positive(f"{path}.grain_diameter", self.grain_diameter)
+        if self.grain_diameter > 0.05:
+            raise ConfigError(f"{path}.grain_diameter",
+                              f"{self.grain_diameter} m is not a grain; give it in metres (0.5 mm = 0.5e-3)")
+        for key in ("static_friction_deg", "limit_friction_deg"):
+            value = getattr(self, key)
+            if not 1.0 <= value < 90.0:
+                raise ConfigError(f"{path}.{key}",
+                                  f"friction angle {value} must lie in [1, 90) degrees (not radians, not tan)")
+        if not self.limit_friction_deg > self.static_friction_deg:
+            raise ConfigError(f"{path}.limit_friction_deg",
+                              "mu_2 must exceed mu_s: limit_friction_deg > static_friction_deg")
+        _positive(f"{path}.reference_inertial_number", self.reference_inertial_number)
+        if not 0.0 < self.solid_fraction_max <= 1.0:
+            raise ConfigError(f"{path}.solid_fraction_max", "phi_max must lie in (0, 1]")
+        if not 0.0 < self.solid_fraction_min < self.solid_fraction_max:
+            raise ConfigError(f"{path}.solid_fraction_min",
+                              "phi_min must lie in (0, phi_max): solid_fraction_min < solid_fraction_max")
+        _positive(f"{path}.grain_compressibility", self.grain_compressibility)
+        _positive(f"{path}.max_yield_stress", self.max_yield_stress)
+        _positive(f"{path}.regularisation_time", self.regularisation_time)
+
+    @property
+    def mu_s(self) -> float:
+        return math.tan(math.radians(self.static_friction_deg))
+
+    @property
+    def mu_2(self) -> float:
+        return math.tan(math.radians(self.limit_friction_deg))
+
+    @property
+    def reference_density(self) -> float:
+        """Bulk density of packed grains at zero pressure, phi_max rho_s0 [kg/m^3]."""
+        return self.solid_fraction_max * self.grain_density
+
+
+MATERIALS = {"mu_i": MuIMaterial}
+
+
+class AnyMaterial:
+    """Annotation marker: the ``model`` key picks the class from :data:`MATERIALS`."""
+
+
+@dataclass(frozen=True, kw_only=True)
+class ParticleBlock:
+    """A box filled with material particles on a lattice of spacing dp."""
+
+    lower: Tuple[float, ...] = _key("lower corner of the box", unit="m")
+    upper: Tuple[float, ...] = _key("upper corner of the box", unit="m")
+    name: str = _key("label used in messages", "block")
+    velocity: Optional[Tuple[float, ...]] = _key("initial velocity (default at rest)", None, "m/s")
+    initial_stress: Literal["hydrostatic", "zero"] = _key(
+        "hydrostatic: pressure of the overburden of this block; zero: unstressed", "hydrostatic")
+
+    def check(self, path: str, dim: int, domain: Domain, spacing: float) -> None:
+        _check_vector(f"{path}.lower", self.lower, dim)
+        _check_vector(f"{path}.upper", self.upper, dim)
+        if self.velocity is not None:
+            _check_vector(f"{path}.velocity", self.velocity, dim)
+        for a in range(dim):
+            if self.upper[a] - self.lower[a] < spacing * (1 - 1e-9):
+                raise ConfigError(f"{path}.upper", f"box thinner than one particle spacing along axis {AXES[a]}")
+            if self.lower[a] < domain.lower[a] - 1e-12 or self.upper[a] > domain.upper[a] + 1e-12:
+                raise ConfigError(path, f"box [{self.lower}, {self.upper}] leaves the domain along axis {AXES[a]}")
+
+
+@dataclass(frozen=True, kw_only=True)
+class Wall:
+    """A plane wall represented by particles behind it (``type`` selects the boundary model).
+
+    ``ghost`` (mu(I), MODEL.md section 1): fixed ghost particles of [M34]-[M36], laid on the
+    material lattice behind the plane, as many layers as the kernel support needs.
+    """
+
+    normal: Tuple[float, ...] = _key("unit normal of the plane, pointing into the material")
+    point: Tuple[float, ...] = _key("a point on the plane", unit="m")
+    name: str = _key("label used in messages", "wall")
+    type: Literal["ghost"] = _key("boundary model", "ghost")
+    lower: Optional[Tuple[float, ...]] = _key("lower corner of the box that clips the wall (default domain)", None, "m")
+    upper: Optional[Tuple[float, ...]] = _key("upper corner of the box that clips the wall (default domain)", None, "m")
+    max_velocity_factor: float = _key(
+        "beta_max of [M36]: 1.5 (Morris et al. 1997) or 1 (zero ghost velocity)", 1.5, "-")
+
+    def check(self, path: str, dim: int) -> None:
+        _check_vector(f"{path}.normal", self.normal, dim)
+        _check_vector(f"{path}.point", self.point, dim)
+        norm = math.sqrt(sum(c * c for c in self.normal))
+        if abs(norm - 1.0) > 1e-6:
+            raise ConfigError(f"{path}.normal", f"must be a unit vector, has length {norm:.6g}")
+        for key in ("lower", "upper"):
+            if getattr(self, key) is not None:
+                _check_vector(f"{path}.{key}", getattr(self, key), dim)
+        if not 1.0 <= self.max_velocity_factor <= 1.5:
+            raise ConfigError(f"{path}.max_velocity_factor", "beta_max must lie in [1, 1.5] [M36]")
+
+
+@dataclass(frozen=True, kw_only=True)
+class ArtificialViscosity:
+    """Monaghan artificial viscosity [M38]; alpha = beta = 0 removes the stage altogether."""
+
+    alpha: float = _key("linear coefficient (0.05 on the inclined plane of [M])", 0.0, "-")
+    beta: float = _key("quadratic coefficient (0 in [M], 1 in [A])", 0.0, "-")
+
+    def check(self, path: str) -> None:
+        for key in ("alpha", "beta"):
+            value = getattr(self, key)
+            if not (value >= 0 and math.isfinite(value)):
+                raise ConfigError(f"{path}.{key}", f"must be >= 0, got {value}")
+
+    @property
+    def enabled(self) -> bool:
+        return self.alpha > 0 or self.beta > 0
+
+
+@dataclass(frozen=True, kw_only=True)
+class Numerics:
+    particle_spacing: float = _key("dp, initial lattice spacing of particles", unit="m")
+    smoothing_length_ratio: float = _key("h/dp", 1.3, "-")
+    smoothing_function: Literal["wendland_c2", "wendland_c6", "cubic_spline"] = _key(
+        "SPH smoothing function (MODEL.md section 0)", "wendland_c2")
+    cfl: float = _key("Courant number of the time step [M39]", 0.5, "-")
+    integrator: Literal["symplectic_verlet", "predictor_corrector"] = _key(
+        "time integration scheme", "symplectic_verlet")
+    artificial_viscosity: ArtificialViscosity = _key("Monaghan artificial viscosity [M38]", ArtificialViscosity())
+    min_time_step: float = _key("the run stops if the stable time step falls below this", 1e-9, "s")
+
+    def check(self, path: str) -> None:
+        _positive(f"{path}.particle_spacing", self.particle_spacing)
+        if not 1.0 <= self.smoothing_length_ratio <= 3.0:
+            raise ConfigError(f"{path}.smoothing_length_ratio", "h/dp must lie in [1, 3]")
+        if not 0.0 < self.cfl <= 1.0:
+            raise ConfigError(f"{path}.cfl", f"must lie in (0, 1] for a stable explicit step, got {self.cfl}")
+        _positive(f"{path}.min_time_step", self.min_time_step)
+        self.artificial_viscosity.check(f"{path}.artificial_viscosity")
+
+    @property
+    def smoothing_length(self) -> float:
+        return self.particle_spacing * self.smoothing_length_ratio
+
+
+@dataclass(frozen=True, kw_only=True)
+class Run:
+    end_time: float = _key("simulated time to reach", unit="s")
+    output_interval: float = _key("simulated time between frames (VTU, diagnostics)", unit="s")
+    output_dir: Optional[str] = _key("where outputs go (default output/<scene name>)", None)
+    write_vtu: bool = _key("write a VTU particle file per frame (a .pvd series)", True)
+    max_steps: Optional[int] = _key("stop after this many steps (default: no limit)", None)
+
+    def check(self, path: str) -> None:
+        _positive(f"{path}.end_time", self.end_time)
+        _positive(f"{path}.output_interval", self.output_interval)
+        if self.max_steps is not None and self.max_steps < 1:
+            raise ConfigError(f"{path}.max_steps", "must be >= 1")
+
+
+@dataclass(frozen=True, kw_only=True)
+class Scene:
+    dimension: Literal[2, 3] = _key("2 or 3")
+    domain: Domain = _key("bounding box and periodic axes")
+    material: AnyMaterial = _key("constitutive model and its parameters")
+    particles: Tuple[ParticleBlock, ...] = _key("blocks of material particles")
+    numerics: Numerics = _key("discretisation")
+    run: Run = _key("run length and output cadence")
+    name: str = _key("scene name (default: file name)", "scene")
+    arch: Literal["cpu", "cuda", "vulkan", "metal", "gpu"] = _key("Taichi backend", "cpu")
+    precision: Literal["f32", "f64"] = _key("floating point precision of all fields", "f64")
+    gravity: Gravity = _key("gravitational acceleration", Gravity())
+    walls: Tuple[Wall, ...] = _key("walls as boundary particles", ())
+
+    def check(self) -> None:
+        dim = self.dimension
+        self.domain.check("domain", dim)
+        self.gravity.check("gravity")
+        self.material.check("material")
+        self.numerics.check("numerics")
+        self.run.check("run")
+        dp = self.numerics.particle_spacing
+        if dp > min(self.domain.size):
+            raise ConfigError("numerics.particle_spacing",
+                              f"dp = {dp} m is larger than the domain ({min(self.domain.size)} m)")
+        if not self.particles:
+            raise ConfigError("particles", "at least one block of material is needed")
+        for k, block in enumerate(self.particles):
+            block.check(f"particles[{k}]", dim, self.domain, dp)
+        for k, wall in enumerate(self.walls):
+            wall.check(f"walls[{k}]", dim)
+        support = 2.0 * self.numerics.smoothing_length
+        for a, name in enumerate(AXES[:dim]):
+            if name in self.domain.periodic and self.domain.size[a] < 3 * support:
+                raise ConfigError("domain.periodic",
+                                  f"periodic axis {name} spans {self.domain.size[a]} m, less than three kernel "
+                                  f"supports (3 x {support} m)")
+
+    @property
+    def gravity_vector(self) -> Tuple[float, ...]:
+        return self.gravity.vector(self.dimension)
+
+
+# --------------------------------------------------------------------------------------------
+# Loading
+# --------------------------------------------------------------------------------------------
+
+
+def _check_vector(path: str, value: Tuple[float, ...], dim: int) -> None:
+    if len(value) != dim:
+        raise ConfigError(path, f"needs {dim} components (dimension: {dim}), got {len(value)}")
+
+
+def _join(path: str, key: Union[str, int]) -> str:
+    if isinstance(key, int):
+        return f"{path}[{key}]"
+    return f"{path}.{key}" if path else key
+
+
+# The papers' symbols, so that a scene written from the equations gets pointed to the key.
+SYMBOLS = {
+    "mu_s": "static_friction_deg (the angle arctan(mu_s))",
+    "mu_2": "limit_friction_deg (the angle arctan(mu_2))",
+    "I_0": "reference_inertial_number", "i_0": "reference_inertial_number",
+    "phi_max": "solid_fraction_max", "phi_min": "solid_fraction_min",
+    "K_t": "grain_compressibility", "k_t": "grain_compressibility",
+    "tau_0": "max_yield_stress", "m_0": "regularisation_time",
+    "rho_s0": "grain_density", "rho_s": "grain_density", "d0": "grain_diameter", "d": "grain_diameter",
+    "dp": "particle_spacing", "h": "smoothing_length_ratio (h/dp)", "h_over_dp": "smoothing_length_ratio",
+    "g": "gravity.magnitude", "theta": "gravity.tilt_deg", "slope_deg": "tilt_deg",
+}
+
+
+def _suggest(key: str, allowed) -> str:
+    symbol = SYMBOLS.get(key)
+    if symbol and symbol.split(" ")[0].split(".")[-1] in allowed:
+        return f"did you mean {symbol}?"
+    close = difflib.get_close_matches(key, list(allowed), n=1, cutoff=0.6)
+    if close:
+        return f"did you mean '{close[0]}'?"
+    return "allowed keys: " + ", ".join(sorted(allowed))
+
+
+def _type_name(value: Any) -> str:
+    return type(value).__name__
+
+
+def _convert(tp: Any, value: Any, path: str) -> Any:
+    origin = typing.get_origin(tp)
+    args = typing.get_args(tp)
+    if origin is Union:  # Optional[X]
+        if value is None and type(None) in args:
+            return None
+        inner = [a for a in args if a is not type(None)]
+        if len(inner) == 1:
+            return _convert(inner[0], value, path)
+        raise TypeError(f"unsupported union at {path}")
+    if origin is Literal:
+        if value not in args:
+            choices = ", ".join(repr(a) for a in args)
+            hint = ""
+            if isinstance(value, str):
+                close = difflib.get_close_matches(value, [str(a) for a in args], n=1)
+                hint = f"; did you mean '{close[0]}'?" if close else ""
+            raise ConfigError(path, f"{value!r} is not one of {choices}{hint}")
+        return value
+    if origin in (tuple, Tuple):
+        if not isinstance(value, (list, tuple)):
+            raise ConfigError(path, f"expected a list, got {_type_name(value)} {value!r}")
+        item_tp = args[0]
+        return tuple(_convert(item_tp, v, _join(path, k)) for k, v in enumerate(value))
+    if tp is AnyMaterial:
+        return _load_material(value, path)
+    if dataclasses.is_dataclass(tp):
+        return _load_dataclass(tp, value, path)
+    if tp is float:
+        if isinstance(value, bool):
+            raise ConfigError(path, f"expected a number, got {value!r}")
+        if isinstance(value, (int, float)):
+            return float(value)
+        if isinstance(value, str):  # PyYAML reads 1e-5 (no dot) as a string
+            try:
+                return float(value)
+            except ValueError:
+                pass
+        raise ConfigError(path, f"expected a number, got {_type_name(value)} {value!r}")
+    if tp is int:
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise ConfigError(path, f"expected an integer, got {_type_name(value)} {value!r}")
+        return value
+    if tp is bool:
+        if not isinstance(value, bool):
+            raise ConfigError(path, f"expected true or false, got {value!r}")
+        return value
+    if tp is str:
+        if not isinstance(value, str):
+            raise ConfigError(path, f"expected text, got {_type_name(value)} {value!r}")
+        return value
+    raise TypeError(f"unsupported type {tp} at {path}")
+
+
+def _load_dataclass(cls: type, data: Any, path: str) -> Any:
+    if not isinstance(data, dict):
+        raise ConfigError(path, f"expected a mapping of keys, got {_type_name(data)} {data!r}")
+    fields = {f.name: f for f in dataclasses.fields(cls)}
+    for key in data:
+        if key not in fields:
+            raise ConfigError(_join(path, str(key)), f"unknown key; {_suggest(str(key), fields)}")
+    hints = typing.get_type_hints(cls)
+    kwargs = {}
+    for name, f in fields.items():
+        sub = _join(path, name)
+        if name in data:
+            kwargs[name] = _convert(hints[name], data[name], sub)
+        elif f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING:
+            raise ConfigError(sub, f"missing required key ({f.metadata.get('doc', '')})")
+    return cls(**kwargs)
+
+
+def _load_material(data: Any, path: str) -> Any:
+    if not isinstance(data, dict):
+        raise ConfigError(path, f"expected a mapping of keys, got {_type_name(data)}")
+    if "model" not in data:
+        raise ConfigError(_join(path, "model"), f"missing required key; one of {sorted(MATERIALS)}")
+    model = data["model"]
+    if model not in MATERIALS:
+        raise ConfigError(_join(path, "model"), f"unknown model {model!r}; {_suggest(str(model), MATERIALS)}")
+    return _load_dataclass(MATERIALS[model], data, path)
+
+
+def apply_overrides(data: dict, overrides: typing.Iterable[str]) -> dict:
+    """Apply ``dotted.key=value`` overrides (values parsed as YAML) to a raw scene mapping."""
+    for item in overrides:
+        if "=" not in item:
+            raise ConfigError(item, "override must look like section.key=value")
+        dotted, raw = item.split("=", 1)
+        keys = dotted.strip().split(".")
+        node = data
+        for key in keys[:-1]:
+            node = node.setdefault(key, {})
+            if not isinstance(node, dict):
+                raise ConfigError(dotted, f"'{key}' is not a section")
+        node[keys[-1]] = yaml.safe_load(raw)
+    return data
+
+
+def scene_from_dict(data: Any, name: str = "scene") -> Scene:
+    """Validate a raw mapping and return the frozen :class:`Scene`."""
+    if not isinstance(data, dict):
+        raise ConfigError("", f"a scene file must be a mapping of keys, got {_type_name(data)}")
+    data = dict(data)
+    data.setdefault("name", name)
+    scene = _load_dataclass(Scene, data, "")
+    scene.check()
+    return scene
+
+
+def load_scene(path: Union[str, Path], overrides: typing.Iterable[str] = ()) -> Scene:
+    """Read and validate a YAML scene file; ``overrides`` are ``dotted.key=value`` strings."""
+    path = Path(path)
+    try:
+        data = yaml.safe_load(path.read_text())
+    except yaml.YAMLError as err:
+        raise ConfigError("", f"{path} is not valid YAML: {err}") from None
+    if overrides and isinstance(data, dict):
+        data = apply_overrides(data, overrides)
+    return scene_from_dict(data, name=path.stem)
+
+
+def scene_to_dict(scene: Any) -> Any:
+    """Plain data (every default made explicit), for the resolved config written with outputs."""
+    if dataclasses.is_dataclass(scene):
+        return {f.name: scene_to_dict(getattr(scene, f.name)) for f in dataclasses.fields(scene)}
+    if isinstance(scene, tuple):
+        return [scene_to_dict(v) for v in scene]
+    return scene
+
+
+def dump_scene(scene: Scene) -> str:
+    return yaml.safe_dump(scene_to_dict(scene), sort_keys=False)

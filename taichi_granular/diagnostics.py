@@ -1,0 +1,93 @@
+"""Whole-system diagnostics written at every frame, and the per-step run-time guard."""
+import numpy as np
+import taichi as ti
+
+GUARD_CODES = {
+    1: "non-finite position",
+    2: "non-finite velocity",
+    3: "non-finite or non-positive density",
+    4: "non-finite pressure",
+    5: "outside the domain",
+}
+
+
+@ti.data_oriented
+class Diagnostics:
+    """Kinetic energy [J (per m in 2D)], max speed [m/s], max |density error| [-]."""
+
+    def __init__(self, state, model):
+        self.state, self.model = state, model
+        self.kinetic_energy = ti.field(float, shape=())
+        self.max_speed = ti.field(float, shape=())
+        self.max_density_error = ti.field(float, shape=())
+
+    @ti.kernel
+    def _measure(self):
+        self.kinetic_energy[None] = 0.0
+        self.max_speed[None] = 0.0
+        self.max_density_error[None] = 0.0
+        for i in range(self.state.n_material):
+            v = self.state.velocity[i]
+            self.kinetic_energy[None] += 0.5 * self.state.mass[i] * v.norm_sqr()
+            ti.atomic_max(self.max_speed[None], v.norm())
+            ti.atomic_max(self.max_density_error[None], ti.abs(self.model.density_error(i)))
+
+    def measure(self) -> dict:
+        self._measure()
+        return {"kinetic_energy": float(self.kinetic_energy[None]), "max_speed": float(self.max_speed[None]),
+                "max_density_error": float(self.max_density_error[None])}
+
+
+@ti.data_oriented
+class Guard:
+    """Finds the first material particle with a non-finite or out-of-domain state."""
+
+    def __init__(self, state, domain):
+        self.state = state
+        self.dim = state.dim
+        self.lower = tuple(domain.lower)
+        self.upper = tuple(domain.upper)
+        self.periodic = domain.periodic_mask
+        self.first_bad = ti.field(ti.i32, shape=())
+        self.code = ti.field(ti.i32, shape=state.n_material)
+
+    @ti.func
+    def finite(self, value):
+        return ti.abs(value) < 1e300  # false for NaN and Inf
+
+    @ti.kernel
+    def _check(self) -> ti.i32:
+        n = self.state.n_material
+        self.first_bad[None] = n
+        for i in range(n):
+            code = 0
+            x = self.state.position[i]
+            v = self.state.velocity[i]
+            for a in ti.static(range(self.dim)):
+                if not self.finite(x[a]):
+                    code = 1
+                elif not self.finite(v[a]):
+                    code = 2
+                elif ti.static(not self.periodic[a]):
+                    if x[a] < self.lower[a] or x[a] > self.upper[a]:
+                        code = 5
+            if code == 0:
+                rho = self.state.density[i]
+                if not (self.finite(rho) and rho > 0.0):
+                    code = 3
+                elif not self.finite(self.state.pressure[i]):
+                    code = 4
+            self.code[i] = code
+            if code != 0:
+                ti.atomic_min(self.first_bad[None], i)
+        return self.first_bad[None]
+
+    def check(self):
+        """None if every particle is sound, else (particle id, reason, values)."""
+        bad = int(self._check())
+        if bad >= self.state.n_material:
+            return None
+        code = int(self.code[bad])
+        values = {name: np.asarray(self.state.field(name)[bad]).tolist()
+                  for name in ("position", "velocity", "density", "pressure")}
+        return bad, GUARD_CODES[code], values

@@ -1,0 +1,135 @@
+"""Outputs of a run, each written atomically (temporary file + rename): nothing half-written.
+
+``<out>/scene.resolved.yaml``   the scene with every default made explicit
+``<out>/particles_NNNNNN.vtu``  one VTU point cloud per frame (meshio)
+``<out>/particles.pvd``         the series ParaView opens, with simulated times
+``<out>/diagnostics.csv``       t, step, dt, kinetic energy, max speed, max density error per frame
+"""
+from __future__ import annotations
+
+import csv
+import io
+import os
+import tempfile
+import xml.etree.ElementTree as ET
+from pathlib import Path
+from typing import Dict, Iterable, List
+
+import meshio
+import numpy as np
+
+from .config import Scene, dump_scene
+
+DIAGNOSTIC_COLUMNS = ("t", "step", "dt", "kinetic_energy", "max_speed", "max_density_error")
+# Fields written to VTU for every particle (walls included), if the state has them.
+VTU_FIELDS = ("velocity", "pressure", "density", "mass")
+
+
+def atomic_write(path: Path, write) -> None:
+    """Call ``write(tmp_path)`` then rename onto ``path`` (same directory, so atomic)."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    os.close(fd)
+    try:
+        write(tmp)
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+
+
+def atomic_write_text(path: Path, text: str) -> None:
+    def write(tmp):
+        with open(tmp, "w") as fh:
+            fh.write(text)
+    atomic_write(path, write)
+
+
+def frame_name(index: int) -> str:
+    return f"particles_{index:06d}.vtu"
+
+
+def particle_mesh(arrays: Dict[str, np.ndarray], n_material: int) -> meshio.Mesh:
+    """A VTU point cloud of every particle; 2D positions get z = 0; material-only fields are
+    padded with 0 on wall particles, and ``is_wall`` marks the walls for ParaView thresholds."""
+    pos = arrays["position"]
+    n, dim = pos.shape
+    points = np.zeros((n, 3))
+    points[:, :dim] = pos
+    data = {}
+    for name, values in arrays.items():
+        if name == "position" or name.endswith("_start") or name.startswith("wall_"):
+            continue
+        values = np.asarray(values)
+        if values.ndim > 2:  # tensors: flatten components
+            values = values.reshape(values.shape[0], -1)
+        full = np.zeros((n,) + values.shape[1:], dtype=float)
+        full[: values.shape[0]] = values
+        if full.ndim == 2 and full.shape[1] == dim and dim == 2:
+            full = np.concatenate([full, np.zeros((n, 1))], axis=1)  # ParaView wants 3-vectors
+        data[name] = full
+    data["is_wall"] = (np.arange(n) >= n_material).astype(np.int32)
+    cells = [("vertex", np.arange(n).reshape(-1, 1))]
+    return meshio.Mesh(points, cells, point_data=data)
+
+
+class RunOutput:
+    """The output directory of one run."""
+
+    def __init__(self, out_dir: Path, write_vtu: bool = True):
+        self.dir = Path(out_dir)
+        self.dir.mkdir(parents=True, exist_ok=True)
+        self.write_vtu = write_vtu
+        self.frames: List[tuple] = []  # (time, file name)
+        self.diagnostics: List[dict] = []
+
+    def write_scene(self, scene: Scene) -> None:
+        atomic_write_text(self.dir / "scene.resolved.yaml", dump_scene(scene))
+
+    def write_frame(self, index: int, time: float, arrays: Dict[str, np.ndarray], n_material: int) -> None:
+        if not self.write_vtu:
+            return
+        name = frame_name(index)
+        mesh = particle_mesh(arrays, n_material)
+        atomic_write(self.dir / name, lambda tmp: meshio.write(tmp, mesh, file_format="vtu"))
+        self.frames.append((time, name))
+        atomic_write_text(self.dir / "particles.pvd", pvd_text(self.frames))
+
+    def write_diagnostics(self, row: dict) -> None:
+        self.diagnostics.append(row)
+        buf = io.StringIO()
+        writer = csv.DictWriter(buf, fieldnames=DIAGNOSTIC_COLUMNS, extrasaction="ignore")
+        writer.writeheader()
+        for r in self.diagnostics:
+            writer.writerow({k: (f"{v:.9g}" if isinstance(v, float) else v) for k, v in r.items()})
+        atomic_write_text(self.dir / "diagnostics.csv", buf.getvalue())
+
+
+def pvd_text(frames: Iterable[tuple]) -> str:
+    lines = ['<?xml version="1.0"?>',
+             '<VTKFile type="Collection" version="0.1" byte_order="LittleEndian">', "  <Collection>"]
+    for time, name in frames:
+        lines.append(f'    <DataSet timestep="{time:.9g}" group="" part="0" file="{name}"/>')
+    lines += ["  </Collection>", "</VTKFile>", ""]
+    return "\n".join(lines)
+
+
+def read_series(out_dir: Path) -> List[tuple]:
+    """(time, path) of every frame listed in ``particles.pvd``."""
+    out_dir = Path(out_dir)
+    pvd = out_dir / "particles.pvd"
+    if not pvd.exists():
+        raise FileNotFoundError(f"no particle series in {out_dir} (missing particles.pvd)")
+    root = ET.parse(pvd).getroot()
+    return [(float(ds.get("timestep")), out_dir / ds.get("file")) for ds in root.iter("DataSet")]
+
+
+def read_frame(path: Path) -> Dict[str, np.ndarray]:
+    """Point data of one VTU frame, with ``position`` added (z dropped where all zero)."""
+    mesh = meshio.read(path)
+    arrays = {k: np.asarray(v) for k, v in mesh.point_data.items()}
+    pts = np.asarray(mesh.points)
+    arrays["position"] = pts[:, :2] if np.all(pts[:, 2] == 0) else pts
+    return arrays

@@ -1,0 +1,47 @@
+"""Monaghan artificial viscosity [M38] / [A16]-[A19], a stage of its own so that a scene
+without it neither compiles nor runs it.
+
+For v_ij . x_ij < 0: phi_ij = h (v_ij . x_ij)/(r^2 + 0.01 h^2),
+Pi_ij = (-alpha c_ij phi_ij + beta phi_ij^2)/rho_ij (bars: arithmetic means), and
+dv_i/dt -= sum_j m_j Pi_ij grad_i W_ij.
+"""
+import taichi as ti
+
+from .stage import Stage
+
+
+@ti.data_oriented
+class ArtificialViscosity(Stage):
+    name = "artificial_viscosity"
+    category = "forces"
+    equation = "[M38]"
+
+    def __init__(self, ctx):
+        self.state, self.grid, self.smoothing, self.walls = ctx.state, ctx.grid, ctx.smoothing, ctx.walls
+        self.model = ctx.model
+        av = ctx.scene.numerics.artificial_viscosity
+        self.alpha, self.beta = av.alpha, av.beta
+        self.h = ctx.smoothing.h
+        self.eps2 = 0.01 * self.h**2
+
+    @ti.func
+    def pair(self, i, j, x_ij, r, acc: ti.template()):
+        v_ij = self.walls.relative_velocity(i, j, x_ij)
+        approach = v_ij.dot(x_ij)
+        if approach < 0.0:
+            k = self.walls.state_index(i, j)
+            phi = self.h * approach / (r * r + self.eps2)
+            c_ij = 0.5 * (self.model.sound_speed(i) + self.model.sound_speed(k))
+            rho_ij = 0.5 * (self.state.density[i] + self.state.density[k])
+            Pi = (-self.alpha * c_ij * phi + self.beta * phi * phi) / rho_ij
+            acc -= self.state.mass[j] * Pi * self.smoothing.gradient(x_ij, r)
+
+    @ti.kernel
+    def _run(self):
+        for i in range(self.state.n_material):
+            acc = ti.Vector.zero(float, self.state.dim)
+            self.grid.for_each_neighbor(i, self.pair, acc)
+            self.state.acceleration[i] += acc
+
+    def run(self) -> None:
+        self._run()

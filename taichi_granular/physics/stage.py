@@ -1,0 +1,38 @@
+"""The Stage: one kernel launch of one physics step, named for the stage list and profile."""
+from dataclasses import dataclass
+from typing import Any, Tuple
+
+from ..state import FieldSpec
+
+# The categories of the per-stage profile, in the order a step runs them.
+CATEGORIES = ("neighbours", "density", "eos", "rheology", "forces", "walls", "integration")
+
+
+@dataclass
+class Context:
+    """What stages are built from: the state, the neighbour grid, the smoothing function,
+    the boundary model, the material model and the scene."""
+
+    state: Any
+    grid: Any
+    smoothing: Any
+    walls: Any
+    model: Any
+    scene: Any
+
+
+class Stage:
+    """Base class. Subclasses set ``name``, ``category``, ``equation`` and ``fields``
+    (the FieldSpecs they need allocated) and implement ``run()`` (one kernel call)."""
+
+    name = "stage"
+    category = "forces"
+    equation = ""
+    fields: Tuple[FieldSpec, ...] = ()
+
+    def run(self) -> None:  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    def describe(self) -> str:
+        eq = f" {self.equation}" if self.equation else ""
+        return f"{self.name} [{self.category}]{eq}"

@@ -1,0 +1,62 @@
+"""Fixed ghost particles of Morris, Fox & Zhu (1997), as used by [M] (MODEL.md section 1).
+
+Ghosts sit on the material lattice behind the wall plane. In a pair with material particle i
+a ghost carries i's own state (density, pressure, viscosity: "the same total stress") and the
+fictitious velocity v_j = -(d_j/d_i) v_i [M34], so that v_ij = beta v_i with
+beta = min(beta_max, 1 + d_j/d_i) [M35]-[M36]: a no-slip wall.
+"""
+import taichi as ti
+
+from ...state import FieldSpec
+
+
+@ti.data_oriented
+class NoWalls:
+    """The boundary interface for scenes without walls: every neighbour is material."""
+
+    name = "none"
+    fields = ()
+
+    def __init__(self, state):
+        self.state = state
+
+    def stages(self):
+        return []
+
+    @ti.func
+    def state_index(self, i, j):
+        return j
+
+    @ti.func
+    def relative_velocity(self, i, j, x_ij):
+        return self.state.velocity[i] - self.state.velocity[j]
+
+
+@ti.data_oriented
+class GhostWalls(NoWalls):
+    name = "ghost"
+    fields = (
+        FieldSpec("wall_normal", "vector", "unit normal of the ghost's wall, into the material", "-", "wall"),
+        FieldSpec("wall_distance", "scalar", "d_j, distance of the ghost behind its wall [M34]", "m", "wall"),
+        FieldSpec("wall_beta_max", "scalar", "beta_max of the ghost's wall [M36]", "-", "wall"),
+    )
+
+    @ti.func
+    def state_index(self, i, j):
+        k = j
+        if j >= self.state.n_material:
+            k = i
+        return k
+
+    @ti.func
+    def relative_velocity(self, i, j, x_ij):
+        v_ij = self.state.velocity[i] - self.state.velocity[j]
+        if j >= self.state.n_material:
+            w = j - self.state.n_material
+            d_j = self.state.wall_distance[w]
+            d_i = x_ij.dot(self.state.wall_normal[w]) - d_j  # x_ij . n = d_i + d_j
+            beta = self.state.wall_beta_max[w]
+            if d_i > 0.0:
+                beta = ti.min(beta, 1.0 + d_j / d_i)  # [M35]-[M36]
+            v_ij = beta * self.state.velocity[i]
+        return v_ij

@@ -1,0 +1,214 @@
+"""Scene geometry -> initial particles, in numpy only.
+
+Material particles fill each block on a lattice of spacing dp (cell-centred: the first
+particle sits dp/2 inside the box). Wall particles sit on the same lattice behind each wall
+plane, as many layers as the kernel support 2h needs. The result is a plain
+:class:`InitialParticles` that the scheme copies into Taichi fields once.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Callable, Dict, List
+
+import numpy as np
+
+from ..config import ConfigError, Scene
+
+
+@dataclass
+class InitialParticles:
+    """Material particles first, then wall particles; arrays are (n_total, ...)."""
+
+    position: np.ndarray
+    velocity: np.ndarray
+    mass: np.ndarray
+    density: np.ndarray
+    pressure: np.ndarray
+    n_material: int
+    wall_fields: Dict[str, np.ndarray] = field(default_factory=dict)  # (n_wall, ...)
+    block_of: np.ndarray = None  # block index of each material particle
+    wall_of: np.ndarray = None  # wall index of each wall particle
+
+    @property
+    def n_total(self) -> int:
+        return self.position.shape[0]
+
+    @property
+    def n_wall(self) -> int:
+        return self.n_total - self.n_material
+
+
+def lattice_box(lower, upper, spacing: float) -> np.ndarray:
+    """Cell-centred lattice points of spacing ``spacing`` filling the box [lower, upper]."""
+    axes = []
+    for lo, hi in zip(lower, upper):
+        n = int(math.floor((hi - lo) / spacing + 1e-9))
+        axes.append(lo + (np.arange(n) + 0.5) * spacing)
+    grids = np.meshgrid(*axes, indexing="ij")
+    return np.stack([g.ravel() for g in grids], axis=1)
+
+
+def tangent_basis(normal: np.ndarray) -> List[np.ndarray]:
+    """Unit tangents completing ``normal`` to an orthonormal basis (2D: one, 3D: two)."""
+    n = np.asarray(normal, dtype=float)
+    if n.size == 2:
+        return [np.array([n[1], -n[0]])]
+    helper = np.array([1.0, 0.0, 0.0]) if abs(n[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+    t1 = np.cross(n, helper)
+    t1 /= np.linalg.norm(t1)
+    return [t1, np.cross(n, t1)]
+
+
+def wall_lattice(point, normal, lower, upper, spacing: float, layers: int):
+    """Lattice points behind a plane, inside the box [lower, upper].
+
+    Returns (positions, distance behind the plane). Points are at
+    point + (i + 1/2) dp t (+ (k + 1/2) dp t2) - (l + 1/2) dp n, l < layers.
+    """
+    point = np.asarray(point, float)
+    normal = np.asarray(normal, float)
+    lower = np.asarray(lower, float)
+    upper = np.asarray(upper, float)
+    tangents = tangent_basis(normal)
+    corners = np.array(np.meshgrid(*[[lo, hi] for lo, hi in zip(lower, upper)], indexing="ij")).reshape(len(lower), -1).T
+    ranges = []
+    for t in tangents:
+        proj = (corners - point) @ t / spacing
+        ranges.append(np.arange(math.floor(proj.min()) - 1, math.ceil(proj.max()) + 1))
+    grids = np.meshgrid(*ranges, np.arange(layers), indexing="ij")
+    coords = [g.ravel() for g in grids]
+    depth = (coords[-1] + 0.5) * spacing
+    pos = point - depth[:, None] * normal
+    for t, c in zip(tangents, coords[:-1]):
+        pos = pos + ((c + 0.5) * spacing)[:, None] * t
+    tol = 1e-9 * max(1.0, float(np.max(np.abs(upper - lower))))
+    inside = np.all((pos >= lower - tol) & (pos <= upper + tol), axis=1)
+    return pos[inside], depth[inside]
+
+
+def hydrostatic_pressure(depth: np.ndarray, gravity_normal: float,
+                         density_of_pressure: Callable[[np.ndarray], np.ndarray]) -> np.ndarray:
+    """p(depth) solving dp/d(depth) = rho(p) g_n with p(0) = 0 (RK4 on a fine grid)  [Pa].
+
+    ``gravity_normal`` is the component of gravity along the bed normal [m/s^2].
+    """
+    depth = np.asarray(depth, float)
+    if depth.size == 0 or gravity_normal <= 0:
+        return np.zeros_like(depth)
+    d_max = float(depth.max())
+    n = max(200, int(d_max / 1e-4))
+    grid = np.linspace(0.0, d_max, n + 1)
+    step = grid[1] - grid[0]
+    p = np.zeros(n + 1)
+
+    def rate(value):
+        return gravity_normal * density_of_pressure(np.array([value]))[0]
+
+    for k in range(n):
+        k1 = rate(p[k])
+        k2 = rate(p[k] + 0.5 * step * k1)
+        k3 = rate(p[k] + 0.5 * step * k2)
+        k4 = rate(p[k] + step * k3)
+        p[k + 1] = p[k] + step * (k1 + 2 * k2 + 2 * k3 + k4) / 6.0
+    return np.interp(np.clip(depth, 0.0, None), grid, p)
+
+
+def build_initial(scene: Scene, model) -> InitialParticles:
+    """Material blocks and wall particles of ``scene``; ``model`` supplies
+    ``initial_density(pressure)`` and ``reference_density()``."""
+    dim = scene.dimension
+    dp = scene.numerics.particle_spacing
+    g = np.array(scene.gravity_vector)
+    g_normal = -g[dim - 1]  # gravity along -(vertical axis): bed-normal component
+    rho_ref = model.reference_density()
+    volume = dp**dim
+
+    positions, velocities, pressures, block_of = [], [], [], []
+    for k, block in enumerate(scene.particles):
+        pts = lattice_box(block.lower, block.upper, dp)
+        if len(pts) == 0:
+            raise ConfigError(f"particles[{k}]", "box holds no particle at this spacing")
+        positions.append(pts)
+        vel = np.zeros_like(pts) if block.velocity is None else np.tile(np.array(block.velocity, float), (len(pts), 1))
+        velocities.append(vel)
+        if block.initial_stress == "hydrostatic":
+            depth = block.upper[dim - 1] - pts[:, dim - 1]
+            pressures.append(hydrostatic_pressure(depth, g_normal, model.initial_density))
+        else:
+            pressures.append(np.zeros(len(pts)))
+        block_of.append(np.full(len(pts), k))
+    x_mat = np.concatenate(positions)
+    block_of = np.concatenate(block_of)
+    _check_overlaps(x_mat, block_of, dp, scene)
+    _check_inside_domain(x_mat, scene, lambda i: f"particles[{block_of[i]}]", "material outside the domain")
+    n_mat = len(x_mat)
+
+    wall_pos, wall_depth, wall_normal, wall_beta, wall_of = [], [], [], [], []
+    layers = int(math.ceil(2.0 * scene.numerics.smoothing_length / dp - 1e-9))
+    for w, wall in enumerate(scene.walls):
+        lower = wall.lower if wall.lower is not None else scene.domain.lower
+        upper = wall.upper if wall.upper is not None else scene.domain.upper
+        pts, depth = wall_lattice(wall.point, wall.normal, lower, upper, dp, layers)
+        behind = (x_mat - np.array(wall.point)) @ np.array(wall.normal) < 0
+        inside = np.all((x_mat >= np.array(lower) - 1e-12) & (x_mat <= np.array(upper) + 1e-12), axis=1)
+        if np.any(behind & inside):
+            i = int(np.argmax(behind & inside))
+            raise ConfigError(f"walls[{w}]", f"material particle {i} at {x_mat[i].tolist()} lies behind wall "
+                                             f"'{wall.name}'")
+        if len(pts) == 0:
+            raise ConfigError(f"walls[{w}]", f"wall '{wall.name}' has no particle inside its box")
+        wall_pos.append(pts)
+        wall_depth.append(depth)
+        wall_normal.append(np.tile(np.array(wall.normal, float), (len(pts), 1)))
+        wall_beta.append(np.full(len(pts), wall.max_velocity_factor))
+        wall_of.append(np.full(len(pts), w))
+    if wall_pos:
+        x_wall, keep = _unique_points(np.concatenate(wall_pos), dp)
+        wall_fields = {"wall_distance": np.concatenate(wall_depth)[keep],
+                       "wall_normal": np.concatenate(wall_normal)[keep],
+                       "wall_beta_max": np.concatenate(wall_beta)[keep]}
+        wall_of_arr = np.concatenate(wall_of)[keep]
+        _check_inside_domain(x_wall, scene, lambda i: f"walls[{wall_of_arr[i]}]",
+                             "wall particles reach outside the domain; enlarge domain")
+    else:
+        x_wall = np.zeros((0, dim))
+        wall_fields, wall_of_arr = {}, np.zeros(0, int)
+
+    p_mat = np.concatenate(pressures)
+    n_wall = len(x_wall)
+    position = np.concatenate([x_mat, x_wall]).astype(float)
+    velocity = np.concatenate([np.concatenate(velocities), np.zeros((n_wall, dim))])
+    pressure = np.concatenate([p_mat, np.zeros(n_wall)])
+    density = np.concatenate([model.initial_density(p_mat), np.full(n_wall, rho_ref)])
+    mass = np.full(n_mat + n_wall, rho_ref * volume)
+    return InitialParticles(position=position, velocity=velocity, mass=mass, density=density,
+                            pressure=pressure, n_material=n_mat, wall_fields=wall_fields,
+                            block_of=block_of, wall_of=wall_of_arr)
+
+
+def _unique_points(points: np.ndarray, spacing: float):
+    """Drop wall points that coincide with earlier ones (walls meeting at a corner)."""
+    keys = np.round(points / (1e-3 * spacing)).astype(np.int64)
+    _, first = np.unique(keys, axis=0, return_index=True)
+    keep = np.sort(first)
+    return points[keep], keep
+
+
+def _check_overlaps(points: np.ndarray, block_of: np.ndarray, spacing: float, scene: Scene) -> None:
+    keys = np.round(points / (1e-3 * spacing)).astype(np.int64)
+    _, first, counts = np.unique(keys, axis=0, return_index=True, return_counts=True)
+    if np.any(counts > 1):
+        i = int(first[np.argmax(counts > 1)])
+        raise ConfigError(f"particles[{block_of[i]}]", f"blocks overlap at {points[i].tolist()}")
+
+
+def _check_inside_domain(points: np.ndarray, scene: Scene, key_of, message: str) -> None:
+    lower = np.array(scene.domain.lower)
+    upper = np.array(scene.domain.upper)
+    periodic = np.array(scene.domain.periodic_mask)
+    outside = np.any(((points < lower) | (points > upper)) & ~periodic, axis=1)
+    if np.any(outside):
+        i = int(np.argmax(outside))
+        raise ConfigError(key_of(i), f"{message}: particle at {points[i].tolist()} is outside "
+                                     f"[{scene.domain.lower}, {scene.domain.upper}]")

@@ -1,0 +1,114 @@
+"""Builds, for one scene, the ordered stage list of a time step and the fields it needs.
+
+Only what the scene asks for is instantiated: the material model's stages, the boundary
+model's stages, artificial viscosity if its coefficients are non-zero, and the chosen
+integrator. ParticleState allocates the union of the fields these declare; Taichi compiles a
+kernel only when it first runs, so stages that are not in the list are never compiled.
+"""
+from typing import List
+
+import numpy as np
+
+from .neighbors import NeighborGrid, NeighbourSearch
+from .integrators import INTEGRATORS, StableTimeStep
+from .physics.artificial_viscosity import ArtificialViscosity
+from .physics.rheology import MODELS
+from .physics.stage import Context
+from .physics.walls import BOUNDARIES, NoWalls
+from .profiling import StageProfiler
+from .scene import InitialParticles, build_initial
+from .smoothing import make_smoothing
+from .state import ParticleState, merge_specs
+from .config import ConfigError, Scene
+
+
+def boundary_class(scene: Scene):
+    types = sorted({w.type for w in scene.walls})
+    if not types:
+        return NoWalls
+    if len(types) > 1:
+        raise ConfigError("walls", f"one boundary model per scene, got {types}")
+    return BOUNDARIES[types[0]]
+
+
+def rate_stage_classes(scene: Scene, model) -> List[type]:
+    """Stages of one rate evaluation, in order."""
+    classes = [NeighbourSearch]
+    walls_cls = boundary_class(scene)
+    classes += getattr(walls_cls, "stage_classes", lambda s: [])(scene)
+    classes += model.stage_classes(scene)
+    if scene.numerics.artificial_viscosity.enabled:
+        classes.append(ArtificialViscosity)
+    return classes
+
+
+class Scheme:
+    """State, neighbour grid, smoothing function, boundary and material models, and stages."""
+
+    def __init__(self, scene: Scene, profiler: StageProfiler = None, initial: InitialParticles = None):
+        self.scene = scene
+        self.profiler = profiler or StageProfiler(False)
+        dim = scene.dimension
+        h = scene.numerics.smoothing_length
+        model = MODELS[scene.material.model](scene.material, dim, h, scene.precision)
+        self.initial = initial if initial is not None else build_initial(scene, model)
+        walls_cls = boundary_class(scene)
+        rate_classes = rate_stage_classes(scene, model)
+        integrator_cls = INTEGRATORS[scene.numerics.integrator]
+        specs = merge_specs([model.fields, walls_cls.fields, integrator_cls.fields]
+                            + [cls.fields for cls in rate_classes])
+        ini = self.initial
+        self.state = ParticleState(dim, ini.n_material, ini.n_wall, specs)
+        self.state.load({"position": ini.position, "velocity": ini.velocity, "mass": ini.mass,
+                         "density": ini.density, "pressure": ini.pressure, **ini.wall_fields})
+        model.state = self.state
+        self.model = model
+        self.smoothing = make_smoothing(scene.numerics.smoothing_function, h, dim)
+        self.grid = NeighborGrid(self.state.position, scene.domain.lower, scene.domain.upper,
+                                 scene.domain.periodic_mask, self.smoothing.support)
+        self.walls = walls_cls(self.state)
+        ctx = Context(state=self.state, grid=self.grid, smoothing=self.smoothing, walls=self.walls,
+                      model=model, scene=scene)
+        self.rate_stages = [cls(ctx) for cls in rate_classes]
+        self.integrator = integrator_cls(ctx)
+        self.time_step = StableTimeStep(ctx)
+
+    # ---- stepping -----------------------------------------------------------------------------
+
+    def evaluate_rates(self) -> None:
+        for stage in self.rate_stages:
+            self.profiler(stage)
+
+    def prepare(self) -> None:
+        """Anything the integrator needs before its first step (initial rates)."""
+        self.integrator.prepare(self.evaluate_rates)
+
+    def step(self, dt: float) -> None:
+        self.integrator.step(dt, self.evaluate_rates, self.profiler)
+
+    def stable_time_step(self) -> float:
+        self.profiler(self.time_step)
+        return self.time_step.value()
+
+    # ---- description --------------------------------------------------------------------------
+
+    def stage_list(self) -> List[str]:
+        """The stages of one time step, in order, as the integrator runs them."""
+        rates = [s.describe() for s in self.rate_stages]
+        integ = self.integrator
+        if integ.rate_evaluations == 1:
+            steps = [f"{integ.name}: half step [integration]"] + rates + [f"{integ.name}: full step [integration]"]
+        else:
+            steps = rates + [f"{integ.name}: predictor [integration]"] + rates + \
+                    [f"{integ.name}: corrector [integration]"]
+        return steps + [self.time_step.describe()]
+
+    def memory_bytes(self) -> int:
+        itemsize = 8 if self.scene.precision == "f64" else 4
+        return sum(row[3] for row in self.state.memory_table(itemsize)) + self.grid.memory_bytes()
+
+    def snapshot(self) -> dict:
+        """Numpy copy of every field, plus the model's derived quantities for output."""
+        arrays = self.state.to_numpy()
+        arrays.update(self.model.derived_output(arrays))
+        return arrays

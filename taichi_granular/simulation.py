@@ -1,0 +1,147 @@
+"""The run loop: time stepping, output cadence, progress, guards."""
+from __future__ import annotations
+
+import math
+import sys
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Optional
+
+from . import runtime
+from .config import Scene
+from .diagnostics import Diagnostics, Guard
+from .output import RunOutput
+from .profiling import StageProfiler
+
+
+class SimulationError(RuntimeError):
+    """A run stopped by a guard: names the step, time, particle and offending values."""
+
+
+@dataclass
+class RunSummary:
+    steps: int
+    time: float
+    wall_seconds: float
+    frames: int
+    particle_steps_per_second: float
+    out_dir: Optional[Path]
+
+
+class Progress:
+    """One status line on stderr: simulated time, steps/s, ETA (only on terminals, or forced)."""
+
+    def __init__(self, end_time: float, enabled: bool):
+        self.end_time = end_time
+        self.enabled = enabled
+        self.start = time.perf_counter()
+        self.last = 0.0
+
+    def update(self, t: float, step: int, force: bool = False) -> None:
+        if not self.enabled:
+            return
+        now = time.perf_counter()
+        if not force and now - self.last < 0.5:
+            return
+        self.last = now
+        elapsed = now - self.start
+        rate = step / elapsed if elapsed > 0 else 0.0
+        frac = min(1.0, t / self.end_time)
+        eta = elapsed * (1 - frac) / frac if frac > 0 else float("nan")
+        bar = "#" * int(30 * frac)
+        eta_text = time.strftime("%H:%M:%S", time.gmtime(eta)) if math.isfinite(eta) else "--:--:--"
+        sys.stderr.write(f"\r[{bar:<30}] t = {t:.4g}/{self.end_time:.4g} s  step {step}  "
+                         f"{rate:.0f} steps/s  ETA {eta_text} ")
+        sys.stderr.flush()
+
+    def close(self) -> None:
+        if self.enabled:
+            sys.stderr.write("\n")
+
+
+class Simulation:
+    """A scene made runnable: ``Simulation(scene).run()``."""
+
+    def __init__(self, scene: Scene, out_dir: Optional[Path] = None, profile: bool = False,
+                 progress: Optional[bool] = None):
+        runtime.init(scene.arch, scene.precision)
+        from .scheme import Scheme  # after runtime.init: building the scheme allocates fields
+
+        self.scene = scene
+        self.profiler = StageProfiler(profile)
+        self.scheme = Scheme(scene, self.profiler)
+        self.state = self.scheme.state
+        self.diagnostics = Diagnostics(self.state, self.scheme.model)
+        self.guard = Guard(self.state, scene.domain)
+        self.output = RunOutput(out_dir, scene.run.write_vtu) if out_dir is not None else None
+        self.show_progress = sys.stderr.isatty() if progress is None else progress
+        self.t = 0.0
+        self.step_count = 0
+        self.dt = 0.0
+        self.frame_index = 0
+        self.last_diagnostics: dict = {}
+
+    # ---- pieces -------------------------------------------------------------------------------
+
+    def _check(self, where: str) -> None:
+        bad = self.guard.check()
+        if bad is not None:
+            pid, reason, values = bad
+            block = int(self.scheme.initial.block_of[pid])
+            name = self.scene.particles[block].name
+            raise SimulationError(
+                f"step {self.step_count}, t = {self.t:.6g} s, {where}: particle {pid} (block '{name}') "
+                f"{reason}: " + ", ".join(f"{k} = {v}" for k, v in values.items()))
+
+    def write_frame(self) -> None:
+        diag = self.diagnostics.measure()
+        self.last_diagnostics = {"t": self.t, "step": self.step_count, "dt": self.dt, **diag}
+        if self.output is not None:
+            self.output.write_frame(self.frame_index, self.t, self.scheme.snapshot(), self.state.n_material)
+            self.output.write_diagnostics(self.last_diagnostics)
+        self.frame_index += 1
+
+    # ---- the loop -----------------------------------------------------------------------------
+
+    def run(self, end_time: Optional[float] = None, max_steps: Optional[int] = None) -> RunSummary:
+        scene = self.scene
+        end_time = scene.run.end_time if end_time is None else end_time
+        max_steps = scene.run.max_steps if max_steps is None else max_steps
+        interval = scene.run.output_interval
+        if self.output is not None:
+            self.output.write_scene(scene)
+        start_steps = self.step_count
+        wall_start = time.perf_counter()
+        if self.step_count == 0:
+            self.scheme.prepare()
+            self._check("initial rates")
+            self.dt = self.scheme.stable_time_step()
+            self.write_frame()
+        next_output = (math.floor(self.t / interval + 1e-9) + 1) * interval
+        progress = Progress(end_time, self.show_progress)
+        min_dt = scene.numerics.min_time_step
+        while self.t < end_time * (1 - 1e-12):
+            if max_steps is not None and self.step_count >= max_steps:
+                break
+            if not self.dt >= min_dt:
+                raise SimulationError(f"step {self.step_count}, t = {self.t:.6g} s: stable time step "
+                                      f"{self.dt:.3g} s fell below numerics.min_time_step = {min_dt:.3g} s")
+            dt = min(self.dt, next_output - self.t, end_time - self.t)
+            self.scheme.step(dt)
+            self.step_count += 1
+            self.t += dt
+            self._check("after the step")
+            self.dt = self.scheme.stable_time_step()
+            if self.t >= next_output - 1e-9 * interval:
+                self.write_frame()
+                next_output += interval
+            progress.update(self.t, self.step_count - start_steps)
+        progress.update(self.t, self.step_count - start_steps, force=True)
+        progress.close()
+        wall = time.perf_counter() - wall_start
+        steps = self.step_count - start_steps
+        n = self.state.n_material
+        return RunSummary(steps=steps, time=self.t, wall_seconds=wall, frames=self.frame_index,
+                          particle_steps_per_second=n * steps / wall if wall > 0 else 0.0,
+                          out_dir=self.output.dir if self.output else None)

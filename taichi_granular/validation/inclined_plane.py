@@ -1,0 +1,160 @@
+"""Validation 1 of [M]: steady uniform flow down an inclined plane (MODEL.md section 1).
+
+Reference: the analytic mu(I) solution [M56],
+    v_x(z) = (2 I_u/(3 d)) sqrt(phi_u g cos theta) (H^{3/2} - (H - z)^{3/2}),
+    I_u = I_0 (tan theta - mu_s)/(mu_2 - tan theta),  phi_u = phi_max - (phi_max - phi_min) I_u,
+and hydrostatic pressure p(z) = phi_u rho_s g cos theta (H - z).
+
+The layer height H is the one the simulated mass has at the steady solid fraction phi_u
+(the layer dilates from phi_max as it starts to flow): H = M / (L phi_u rho_s0 (1 + K_t p_mean)),
+M/L the mass per unit bed length. The SPH profile is the mean over particles in layers of
+thickness dp, averaged over the frames of the last ``window`` seconds, each compared with the
+reference at the mean height of its particles.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Dict, List, Sequence
+
+import numpy as np
+
+from ..config import MuIMaterial, Scene
+
+
+def steady_inertial_number(material: MuIMaterial, slope_rad: float) -> float:
+    """I_u of [M56]; only slopes between arctan(mu_s) and arctan(mu_2) flow steadily."""
+    tan = math.tan(slope_rad)
+    if not material.mu_s < tan < material.mu_2:
+        raise ValueError(f"slope {math.degrees(slope_rad):.2f} deg is outside the steady range "
+                         f"({material.static_friction_deg}, {material.limit_friction_deg}) deg")
+    return material.reference_inertial_number * (tan - material.mu_s) / (material.mu_2 - tan)
+
+
+def steady_solid_fraction(material: MuIMaterial, slope_rad: float) -> float:
+    I_u = steady_inertial_number(material, slope_rad)
+    return material.solid_fraction_max - (material.solid_fraction_max - material.solid_fraction_min) * I_u
+
+
+def analytic_velocity(z, height: float, material: MuIMaterial, slope_rad: float, g: float) -> np.ndarray:
+    """[M56]: down-slope velocity at height z above the bed  [m/s]."""
+    z = np.clip(np.asarray(z, float), 0.0, height)
+    I_u = steady_inertial_number(material, slope_rad)
+    phi_u = steady_solid_fraction(material, slope_rad)
+    scale = 2.0 * I_u / (3.0 * material.grain_diameter) * math.sqrt(phi_u * g * math.cos(slope_rad))
+    return scale * (height**1.5 - (height - z) ** 1.5)
+
+
+def analytic_pressure(z, height: float, material: MuIMaterial, slope_rad: float, g: float) -> np.ndarray:
+    """Hydrostatic pressure phi_u rho_s g cos(theta) (H - z)  [Pa]."""
+    z = np.clip(np.asarray(z, float), 0.0, height)
+    phi_u = steady_solid_fraction(material, slope_rad)
+    return phi_u * material.grain_density * g * math.cos(slope_rad) * (height - z)
+
+
+def steady_height(mass_per_length: float, material: MuIMaterial, slope_rad: float, g: float) -> float:
+    """Height of the steady layer holding ``mass_per_length`` [kg/m (2D)]  [m]."""
+    phi_u = steady_solid_fraction(material, slope_rad)
+    height = mass_per_length / (phi_u * material.grain_density)
+    for _ in range(20):  # grain compression under the mean pressure (tiny, ~K_t p)
+        p_mean = 0.5 * phi_u * material.grain_density * g * math.cos(slope_rad) * height
+        height = mass_per_length / (phi_u * material.grain_density * (1.0 + material.grain_compressibility * p_mean))
+    return height
+
+
+def relative_l2(simulated: np.ndarray, reference: np.ndarray) -> float:
+    """sqrt(sum (s - r)^2 / sum r^2)."""
+    return float(np.sqrt(np.sum((simulated - reference) ** 2) / np.sum(reference**2)))
+
+
+@dataclass
+class InclinedPlaneResult:
+    velocity_error: float  # relative L2 against [M56]
+    pressure_error: float  # relative L2 against hydrostatic
+    mach_number: float  # max over the window of |v_i|/c_i
+    height: float  # steady layer height H [m]
+    surface_velocity: float  # SPH, top layer [m/s]
+    surface_velocity_reference: float  # [M56] at the same height [m/s]
+    window: tuple  # (t_start, t_end) of the average [s]
+    drift: float  # relative change of the profile between the two halves of the window
+    profile: Dict[str, np.ndarray] = field(default_factory=dict)
+
+    def report(self) -> str:
+        return "\n".join([
+            f"inclined plane: steady profile averaged over t = {self.window[0]:.2f}-{self.window[1]:.2f} s",
+            f"  layer height H (from mass at phi_u)  {self.height * 1e3:.2f} mm",
+            f"  surface velocity SPH / [M56]        {self.surface_velocity:.3f} / "
+            f"{self.surface_velocity_reference:.3f} m/s",
+            f"  velocity relative L2 error vs [M56] {100 * self.velocity_error:.2f} %",
+            f"  pressure relative L2 error vs hydrostatic {100 * self.pressure_error:.2f} %",
+            f"  max Mach number |v|/c               {self.mach_number:.3f}",
+            f"  profile drift within the window     {100 * self.drift:.2f} %",
+        ])
+
+
+def binned_profile(frames: Sequence[Dict[str, np.ndarray]], n_material: int, spacing: float,
+                   height: float):
+    """Mean height, down-slope velocity and pressure of material particles in layers of
+    thickness ``spacing`` (over all given frames)."""
+    edges = np.arange(0.0, height + spacing, spacing)
+    sums = np.zeros((3, len(edges) - 1))
+    counts = np.zeros(len(edges) - 1)
+    for arrays in frames:
+        z = arrays["position"][:n_material, -1]
+        k = np.digitize(z, edges) - 1
+        ok = (k >= 0) & (k < len(counts))
+        counts += np.bincount(k[ok], minlength=len(counts))
+        for row, values in enumerate((z, arrays["velocity"][:n_material, 0], arrays["pressure"][:n_material])):
+            sums[row] += np.bincount(k[ok], weights=values[ok], minlength=len(counts))
+    used = counts > 0
+    z_mean, v_mean, p_mean = sums[:, used] / counts[used]
+    return z_mean, v_mean, p_mean
+
+
+def evaluate(scene: Scene, times: Sequence[float], frames: Sequence[Dict[str, np.ndarray]],
+             window: float = 1.0) -> InclinedPlaneResult:
+    """Errors of the frames within the last ``window`` seconds against [M56] and hydrostatic."""
+    material = scene.material
+    slope = math.radians(scene.gravity.tilt_deg)
+    g = scene.gravity.magnitude
+    times = np.asarray(times)
+    t_end = float(times.max())
+    chosen = [f for t, f in zip(times, frames) if t >= t_end - window - 1e-9]
+    chosen_times = times[times >= t_end - window - 1e-9]
+    n_material = int(np.sum(chosen[0]["is_wall"] == 0))
+    length = scene.domain.size[0]
+    mass_per_length = float(np.sum(chosen[-1]["mass"][:n_material])) / length
+    height = steady_height(mass_per_length, material, slope, g)
+    dp = scene.numerics.particle_spacing
+
+    z, v, p = binned_profile(chosen, n_material, dp, height)
+    v_ref = analytic_velocity(z, height, material, slope, g)
+    p_ref = analytic_pressure(z, height, material, slope, g)
+    half = len(chosen) // 2
+    drift = 0.0
+    if half >= 1:
+        _, v_a, _ = binned_profile(chosen[:half], n_material, dp, height)
+        _, v_b, _ = binned_profile(chosen[half:], n_material, dp, height)
+        if len(v_a) == len(v_b):
+            drift = relative_l2(v_a, v_b)
+    mach = 0.0
+    for arrays in chosen:
+        phi = arrays["solid_fraction"][:n_material]
+        c = 1.0 / np.sqrt(material.grain_compressibility * phi * material.grain_density)
+        speed = np.linalg.norm(arrays["velocity"][:n_material], axis=1)
+        mach = max(mach, float(np.max(speed / c)))
+    return InclinedPlaneResult(
+        velocity_error=relative_l2(v, v_ref), pressure_error=relative_l2(p, p_ref), mach_number=mach,
+        height=height, surface_velocity=float(v[-1]), surface_velocity_reference=float(v_ref[-1]),
+        window=(float(chosen_times.min()), t_end), drift=drift,
+        profile={"z": z, "velocity": v, "velocity_reference": v_ref, "pressure": p, "pressure_reference": p_ref})
+
+
+def write_profile_csv(result: InclinedPlaneResult, path: Path) -> None:
+    from ..output import atomic_write_text
+    cols = ["z", "velocity", "velocity_reference", "pressure", "pressure_reference"]
+    lines = [",".join(cols)]
+    for row in zip(*(result.profile[c] for c in cols)):
+        lines.append(",".join(f"{v:.9g}" for v in row))
+    atomic_write_text(path, "\n".join(lines) + "\n")
