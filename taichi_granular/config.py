@@ -207,6 +207,8 @@ class Wall:
     upper: Optional[Tuple[float, ...]] = _key("upper corner of the box that clips the wall (default domain)", None, "m")
     max_velocity_factor: float = _key(
         "beta_max of [M36]: 1.5 (Morris et al. 1997) or 1 (zero ghost velocity)", 1.5, "-")
+    ghost_pressure: Literal["hydrostatic", "mirror"] = _key(
+        "mirror: p_j = p_i as in [M]; hydrostatic: plus rho_i g_n (d_i + d_j) along the normal", "hydrostatic")
 
     def check(self, path: str, dim: int) -> None:
         _check_vector(f"{path}.normal", self.normal, dim)
@@ -217,8 +219,8 @@ class Wall:
         for key in ("lower", "upper"):
             if getattr(self, key) is not None:
                 _check_vector(f"{path}.{key}", getattr(self, key), dim)
-        if not 1.0 <= self.max_velocity_factor <= 1.5:
-            raise ConfigError(f"{path}.max_velocity_factor", "beta_max must lie in [1, 1.5] [M36]")
+        if not 1.0 <= self.max_velocity_factor <= 100.0:
+            raise ConfigError(f"{path}.max_velocity_factor", "beta_max must lie in [1, 100] [M36]")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -358,6 +360,9 @@ def _suggest(key: str, allowed) -> str:
     if symbol and symbol.split(" ")[0].split(".")[-1] in allowed:
         return f"did you mean {symbol}?"
     close = difflib.get_close_matches(key, list(allowed), n=1, cutoff=0.6)
+    if not close:  # 'cfl_number' for 'cfl', 'density' for 'grain_density'
+        close = sorted((a for a in allowed if key.startswith(a) or a.startswith(key) or a.endswith(key)),
+                       key=len, reverse=True)
     if close:
         return f"did you mean '{close[0]}'?"
     return "allowed keys: " + ", ".join(sorted(allowed))

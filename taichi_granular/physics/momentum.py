@@ -36,7 +36,7 @@ class ViscousMomentum(Stage):
         if eta_i + eta_j > 0.0:
             eta_ij = 2.0 * eta_i * eta_j / (eta_i + eta_j)
         v_ij = self.walls.relative_velocity(i, j, x_ij)
-        pressure_term = -(s.pressure[i] / rho_i**2 + s.pressure[k] / rho_j**2)
+        pressure_term = -(s.pressure[i] / rho_i**2 + self.walls.pressure(i, j, x_ij) / rho_j**2)
         viscous_term = 2.0 * (self.dim + 2) * eta_ij * v_ij.dot(x_ij) / (rho_i * rho_j * (r * r + self.eps2))
         acc += s.mass[j] * (pressure_term + viscous_term) * self.smoothing.gradient(x_ij, r)
 

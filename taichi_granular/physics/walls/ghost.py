@@ -4,6 +4,14 @@ Ghosts sit on the material lattice behind the wall plane. In a pair with materia
 a ghost carries i's own state (density, pressure, viscosity: "the same total stress") and the
 fictitious velocity v_j = -(d_j/d_i) v_i [M34], so that v_ij = beta v_i with
 beta = min(beta_max, 1 + d_j/d_i) [M35]-[M36]: a no-slip wall.
+
+Ghost pressure, per wall (``ghost_pressure``):
+- ``mirror``: p_j = p_i, as in [M]. The ghosts then contribute nothing to the pressure
+  gradient felt by i, so the first rows above the wall compress until their own gradient
+  carries the load: at rest the bottom row sits ~9 % above hydrostatic (measured, h/dp = 1.3).
+- ``hydrostatic``: p_j = p_i + rho_i (g . n)(n . (x_j - x_i)), the mirror pressure extrapolated
+  along the wall normal with the normal component of gravity (after Adami, Hu & Adams 2012,
+  restricted to the normal so that the along-wall pressure stays uniform on a slope).
 """
 import taichi as ti
 
@@ -31,6 +39,10 @@ class NoWalls:
     def relative_velocity(self, i, j, x_ij):
         return self.state.velocity[i] - self.state.velocity[j]
 
+    @ti.func
+    def pressure(self, i, j, x_ij):
+        return self.state.pressure[j]
+
 
 @ti.data_oriented
 class GhostWalls(NoWalls):
@@ -39,6 +51,8 @@ class GhostWalls(NoWalls):
         FieldSpec("wall_normal", "vector", "unit normal of the ghost's wall, into the material", "-", "wall"),
         FieldSpec("wall_distance", "scalar", "d_j, distance of the ghost behind its wall [M34]", "m", "wall"),
         FieldSpec("wall_beta_max", "scalar", "beta_max of the ghost's wall [M36]", "-", "wall"),
+        FieldSpec("wall_pressure_gradient", "scalar",
+                  "g . n of the ghost's wall for hydrostatic ghost pressure, 0 for mirror", "m/s^2", "wall"),
     )
 
     @ti.func
@@ -60,3 +74,13 @@ class GhostWalls(NoWalls):
                 beta = ti.min(beta, 1.0 + d_j / d_i)  # [M35]-[M36]
             v_ij = beta * self.state.velocity[i]
         return v_ij
+
+    @ti.func
+    def pressure(self, i, j, x_ij):
+        p = self.state.pressure[j]
+        if j >= self.state.n_material:
+            w = j - self.state.n_material
+            # (g . n) (n . (x_j - x_i)) with n . x_ij = d_i + d_j > 0 and g . n < 0
+            p = self.state.pressure[i] - self.state.density[i] * self.state.wall_pressure_gradient[w] * \
+                x_ij.dot(self.state.wall_normal[w])
+        return p

@@ -1,0 +1,80 @@
+"""Bad scenes fail before any field exists, with an error that names the key path."""
+import copy
+
+import pytest
+import yaml
+
+from taichi_granular.config import ConfigError, dump_scene, load_scene, scene_from_dict
+from taichi_granular.paths import config_path
+
+BASE = yaml.safe_load(config_path("mu_i/inclined_plane.yaml").read_text())
+
+
+def load_with(edit):
+    data = copy.deepcopy(BASE)
+    edit(data)
+    return scene_from_dict(data)
+
+
+def error_of(edit) -> ConfigError:
+    with pytest.raises(ConfigError) as info:
+        load_with(edit)
+    return info.value
+
+
+def test_bundled_scene_loads_and_round_trips():
+    scene = load_scene(config_path("mu_i/inclined_plane.yaml"))
+    assert scene.material.mu_s == pytest.approx(0.38186, rel=1e-4)
+    again = scene_from_dict(yaml.safe_load(dump_scene(scene)))
+    assert again == scene
+
+
+@pytest.mark.parametrize("edit,path,words", [
+    (lambda d: d["material"].update(grain_densty=800.0), "material.grain_densty", "did you mean 'grain_density'"),
+    (lambda d: d["material"].update(mu_s=0.38), "material.mu_s", "static_friction_deg"),
+    (lambda d: d["numerics"].update(cfl_number=0.5), "numerics.cfl_number", "did you mean 'cfl'"),
+    (lambda d: d.update(dimensions=2), "dimensions", "did you mean 'dimension'"),
+    (lambda d: d["material"].pop("grain_compressibility"), "material.grain_compressibility", "missing"),
+    (lambda d: d.pop("run"), "run", "missing"),
+    (lambda d: d["material"].update(solid_fraction_min=0.6), "material.solid_fraction_min", "phi_min"),
+    (lambda d: d["material"].update(limit_friction_deg=20.0), "material.limit_friction_deg", "mu_2 must exceed"),
+    (lambda d: d["material"].update(grain_density=-800.0), "material.grain_density", "> 0"),
+    (lambda d: d["material"].update(grain_diameter=0.5), "material.grain_diameter", "metres"),
+    (lambda d: d["material"].update(static_friction_deg=0.36), "material.static_friction_deg", "degrees"),
+    (lambda d: d["material"].update(model="mu-i"), "material.model", "did you mean 'mu_i'"),
+    (lambda d: d["numerics"].update(particle_spacing=0.5), "numerics.particle_spacing", "larger than the domain"),
+    (lambda d: d["numerics"].update(cfl=2.0), "numerics.cfl", "stable"),
+    (lambda d: d["numerics"].update(smoothing_function="wendland"), "numerics.smoothing_function", "not one of"),
+    (lambda d: d["numerics"].update(particle_spacing="fine"), "numerics.particle_spacing", "expected a number"),
+    (lambda d: d["domain"].update(lower=[0.0]), "domain.lower", "2 components"),
+    (lambda d: d["domain"].update(periodic=["q"]), "domain.periodic", "unknown axis"),
+    (lambda d: d["particles"][0].update(upper=[0.2, 0.5]), "particles[0]", "leaves the domain"),
+    (lambda d: d["walls"][0].update(normal=[0.0, 2.0]), "walls[0].normal", "unit vector"),
+    (lambda d: d["run"].update(end_time=-1.0), "run.end_time", "> 0"),
+    (lambda d: d["gravity"].update(tilt_deg=95.0), "gravity.tilt_deg", "(-90, 90)"),
+    (lambda d: d.update(arch="tpu"), "arch", "not one of"),
+])
+def test_bad_values_name_their_key(edit, path, words):
+    err = error_of(edit)
+    assert err.path == path
+    assert words in str(err)
+
+
+def test_numbers_written_without_a_dot_are_numbers():
+    scene = load_with(lambda d: d["material"].update(grain_compressibility="1e-5"))  # PyYAML reads a str
+    assert scene.material.grain_compressibility == 1e-5
+
+
+def test_material_behind_a_wall_is_an_error():
+    from taichi_granular.physics.rheology.mu_i import MuIRheology
+    from taichi_granular.scene import build_initial
+
+    scene = load_with(lambda d: d["walls"][0].update(point=[0.0, 0.05]))
+    with pytest.raises(ConfigError, match="behind wall 'base'") as info:
+        build_initial(scene, MuIRheology(scene.material, 2, scene.numerics.smoothing_length))
+    assert info.value.path == "walls[0]"
+
+
+def test_overrides_apply_dotted_keys(tmp_path):
+    scene = load_scene(config_path("mu_i/inclined_plane.yaml"), ["numerics.cfl=0.25", "run.end_time=0.5"])
+    assert scene.numerics.cfl == 0.25 and scene.run.end_time == 0.5
