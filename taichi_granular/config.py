@@ -250,6 +250,11 @@ class Numerics:
     cfl: float = _key("Courant number of the time step [M39]", 0.5, "-")
     integrator: Literal["symplectic_verlet", "predictor_corrector"] = _key(
         "time integration scheme", "symplectic_verlet")
+    momentum: Literal["stress_divergence", "viscous_pair"] = _key(
+        "stress_divergence: sum m (sigma_i/rho_i^2 + sigma_j/rho_j^2) grad W; viscous_pair: [M27]",
+        "stress_divergence")
+    gradient_correction: Literal["scalar", "matrix", "none"] = _key(
+        "kernel gradient renormalisation: scalar d/tr(M), full matrix M^-1, or none", "scalar")
     artificial_viscosity: ArtificialViscosity = _key("Monaghan artificial viscosity [M38]", ArtificialViscosity())
     min_time_step: float = _key("the run stops if the stable time step falls below this", 1e-9, "s")
 

@@ -74,10 +74,12 @@ class SymplecticVerlet(_Update):
         """Rates at t = 0 stand in for a(-1/2) on the first step."""
         evaluate_rates()
 
-    def step(self, dt: float, evaluate_rates, timed) -> None:
-        timed(self, self.half_step, dt)
-        evaluate_rates()
-        timed(self, self.full_step, dt)
+    def step(self, dt: float, scheme) -> None:
+        scheme.profiler(self, self.half_step, dt)
+        scheme.after_move()
+        scheme.evaluate_rates()
+        scheme.profiler(self, self.full_step, dt)
+        scheme.after_move()
 
 
 @ti.data_oriented
@@ -93,11 +95,13 @@ class PredictorCorrector(_Update):
     def prepare(self, evaluate_rates) -> None:
         pass
 
-    def step(self, dt: float, evaluate_rates, timed) -> None:
-        evaluate_rates()
-        timed(self, self.half_step, dt)
-        evaluate_rates()
-        timed(self, self.full_step, dt)
+    def step(self, dt: float, scheme) -> None:
+        scheme.evaluate_rates()
+        scheme.profiler(self, self.half_step, dt)
+        scheme.after_move()
+        scheme.evaluate_rates()
+        scheme.profiler(self, self.full_step, dt)
+        scheme.after_move()
 
 
 INTEGRATORS = {cls.name: cls for cls in (SymplecticVerlet, PredictorCorrector)}

@@ -12,6 +12,7 @@ import numpy as np
 from .neighbors import NeighborGrid, NeighbourSearch
 from .integrators import INTEGRATORS, StableTimeStep
 from .physics.artificial_viscosity import ArtificialViscosity
+from .physics.gradient_correction import GRADIENTS
 from .physics.rheology import MODELS
 from .physics.stage import Context
 from .physics.walls import BOUNDARIES, NoWalls
@@ -33,7 +34,7 @@ def boundary_class(scene: Scene):
 
 def rate_stage_classes(scene: Scene, model) -> List[type]:
     """Stages of one rate evaluation, in order."""
-    classes = [NeighbourSearch]
+    classes = [NeighbourSearch] + GRADIENTS[scene.numerics.gradient_correction].stage_classes()
     walls_cls = boundary_class(scene)
     classes += getattr(walls_cls, "stage_classes", lambda s: [])(scene)
     classes += model.stage_classes(scene)
@@ -55,7 +56,8 @@ class Scheme:
         walls_cls = boundary_class(scene)
         rate_classes = rate_stage_classes(scene, model)
         integrator_cls = INTEGRATORS[scene.numerics.integrator]
-        specs = merge_specs([model.fields, walls_cls.fields, integrator_cls.fields]
+        gradient_cls = GRADIENTS[scene.numerics.gradient_correction]
+        specs = merge_specs([model.fields, walls_cls.fields, integrator_cls.fields, gradient_cls.fields]
                             + [cls.fields for cls in rate_classes])
         ini = self.initial
         self.state = ParticleState(dim, ini.n_material, ini.n_wall, specs)
@@ -69,8 +71,10 @@ class Scheme:
         self.walls = walls_cls(self.state)
         ctx = Context(state=self.state, grid=self.grid, smoothing=self.smoothing, walls=self.walls,
                       model=model, scene=scene)
+        ctx.gradient = self.gradient = gradient_cls(ctx)
         self.rate_stages = [cls(ctx) for cls in rate_classes]
         self.integrator = integrator_cls(ctx)
+        self.position_stages = [cls(ctx) for cls in walls_cls.position_stage_classes()]
         self.time_step = StableTimeStep(ctx)
 
     # ---- stepping -----------------------------------------------------------------------------
@@ -83,8 +87,13 @@ class Scheme:
         """Anything the integrator needs before its first step (initial rates)."""
         self.integrator.prepare(self.evaluate_rates)
 
+    def after_move(self) -> None:
+        """Stages that act on positions right after the integrator moves particles."""
+        for stage in self.position_stages:
+            self.profiler(stage)
+
     def step(self, dt: float) -> None:
-        self.integrator.step(dt, self.evaluate_rates, self.profiler)
+        self.integrator.step(dt, self)
 
     def stable_time_step(self) -> float:
         self.profiler(self.time_step)
@@ -95,12 +104,14 @@ class Scheme:
     def stage_list(self) -> List[str]:
         """The stages of one time step, in order, as the integrator runs them."""
         rates = [s.describe() for s in self.rate_stages]
+        moves = [s.describe() for s in self.position_stages]
         integ = self.integrator
         if integ.rate_evaluations == 1:
-            steps = [f"{integ.name}: half step [integration]"] + rates + [f"{integ.name}: full step [integration]"]
+            steps = [f"{integ.name}: half step [integration]"] + moves + rates + \
+                    [f"{integ.name}: full step [integration]"] + moves
         else:
-            steps = rates + [f"{integ.name}: predictor [integration]"] + rates + \
-                    [f"{integ.name}: corrector [integration]"]
+            steps = rates + [f"{integ.name}: predictor [integration]"] + moves + rates + \
+                    [f"{integ.name}: corrector [integration]"] + moves
         return steps + [self.time_step.describe()]
 
     def memory_bytes(self) -> int:

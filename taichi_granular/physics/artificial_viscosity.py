@@ -17,7 +17,7 @@ class ArtificialViscosity(Stage):
     equation = "[M38]"
 
     def __init__(self, ctx):
-        self.state, self.grid, self.smoothing, self.walls = ctx.state, ctx.grid, ctx.smoothing, ctx.walls
+        self.state, self.grid, self.gradient, self.walls = ctx.state, ctx.grid, ctx.gradient, ctx.walls
         self.model = ctx.model
         av = ctx.scene.numerics.artificial_viscosity
         self.alpha, self.beta = av.alpha, av.beta
@@ -34,7 +34,7 @@ class ArtificialViscosity(Stage):
             c_ij = 0.5 * (self.model.sound_speed(i) + self.model.sound_speed(k))
             rho_ij = 0.5 * (self.state.density[i] + self.state.density[k])
             Pi = (-self.alpha * c_ij * phi + self.beta * phi * phi) / rho_ij
-            acc -= self.state.mass[j] * Pi * self.smoothing.gradient(x_ij, r)
+            acc -= self.state.mass[j] * Pi * self.gradient.pairwise(i, j, x_ij, r)
 
     @ti.kernel
     def _run(self):

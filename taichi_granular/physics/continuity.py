@@ -11,12 +11,12 @@ class Continuity(Stage):
     equation = "[M26]"
 
     def __init__(self, ctx):
-        self.state, self.grid, self.smoothing, self.walls = ctx.state, ctx.grid, ctx.smoothing, ctx.walls
+        self.state, self.grid, self.gradient, self.walls = ctx.state, ctx.grid, ctx.gradient, ctx.walls
 
     @ti.func
     def pair(self, i, j, x_ij, r, rate: ti.template()):
         v_ij = self.walls.relative_velocity(i, j, x_ij)
-        rate += self.state.mass[j] * v_ij.dot(self.smoothing.gradient(x_ij, r))  # [M26]
+        rate += self.state.mass[j] * v_ij.dot(self.gradient.pairwise(i, j, x_ij, r))  # [M26]
 
     @ti.kernel
     def _run(self):

@@ -19,6 +19,7 @@ class Context:
     walls: Any
     model: Any
     scene: Any
+    gradient: Any = None  # PlainGradient or CorrectedGradient: grad W as pair loops see it
 
 
 class Stage:

@@ -11,6 +11,12 @@ from .stage import Stage
 
 
 @ti.func
+def deviator(tensor):
+    """Deviatoric part, taking the out-of-plane component as zero in 2D (plane strain)."""
+    return tensor - (tensor.trace() / 3.0) * ti.Matrix.identity(float, tensor.n)
+
+
+@ti.func
 def strain_rate_modulus(velocity_gradient):
     """gamma_dot = sqrt(2 eps:eps) with eps = sym(grad v)  [1/s]."""
     eps = 0.5 * (velocity_gradient + velocity_gradient.transpose())
@@ -23,10 +29,12 @@ class StrainRate(Stage):
     category = "rheology"
     equation = "[M31]"
     fields = (FieldSpec("strain_rate", "scalar", "strain-rate modulus gamma_dot = sqrt(2 eps:eps)", "1/s",
-                        "material"),)
+                        "material"),
+              FieldSpec("velocity_gradient", "matrix", "grad v, component ab = d v_a/d x_b [M31]", "1/s",
+                        "material"))
 
     def __init__(self, ctx):
-        self.state, self.grid, self.smoothing, self.walls = ctx.state, ctx.grid, ctx.smoothing, ctx.walls
+        self.state, self.grid, self.gradient, self.walls = ctx.state, ctx.grid, ctx.gradient, ctx.walls
         self.dim = ctx.state.dim
 
     @ti.func
@@ -34,13 +42,14 @@ class StrainRate(Stage):
         k = self.walls.state_index(i, j)
         volume_j = self.state.mass[j] / self.state.density[k]
         v_ij = self.walls.relative_velocity(i, j, x_ij)
-        gradient -= volume_j * v_ij.outer_product(self.smoothing.gradient(x_ij, r))  # [M31]
+        gradient -= volume_j * v_ij.outer_product(self.gradient.one_sided(i, j, x_ij, r))  # [M31]
 
     @ti.kernel
     def _run(self):
         for i in range(self.state.n_material):
             gradient = ti.Matrix.zero(float, self.dim, self.dim)
             self.grid.for_each_neighbor(i, self.pair, gradient)
+            self.state.velocity_gradient[i] = gradient
             self.state.strain_rate[i] = strain_rate_modulus(gradient)
 
     def run(self) -> None:

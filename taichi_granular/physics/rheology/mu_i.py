@@ -21,6 +21,7 @@ import taichi as ti
 from ...state import FieldSpec
 from ...tmath import expm1
 from ..stage import Stage
+from ..strain_rate import deviator
 
 
 @ti.data_oriented
@@ -130,6 +131,12 @@ class MuIRheology:
             eta = self.m_0 * tau_y + eta_0 * tau_y / self.tau_0
         return eta
 
+    @ti.func
+    def deviatoric_stress(self, k):
+        """s = 2 eta dev(eps) [M10-11], from the stored velocity gradient  [Pa]."""
+        grad_v = self.state.velocity_gradient[k]
+        return self.state.viscosity[k] * deviator(grad_v + grad_v.transpose())
+
     # ---- wave speed and time step -----------------------------------------------------------
 
     @ti.func
@@ -173,9 +180,10 @@ class MuIRheology:
 
     def stage_classes(self, scene):
         from ..continuity import Continuity
-        from ..momentum import ViscousMomentum
+        from ..momentum import MOMENTUM
         from ..strain_rate import StrainRate
-        return [Continuity, StrainRate, GrainDensityPressure, RegularisedViscosity, ViscousMomentum]
+        return [Continuity, StrainRate, GrainDensityPressure, RegularisedViscosity,
+                MOMENTUM[scene.numerics.momentum]]
 
 
 @ti.data_oriented
@@ -208,6 +216,7 @@ class RegularisedViscosity(Stage):
     name = "regularised_viscosity"
     category = "rheology"
     equation = "[M47]-[M55]"
+    fields = (FieldSpec("viscosity", "scalar", "regularised viscosity eta_hat", "Pa s", "material"),)
 
     def __init__(self, ctx):
         self.state, self.model = ctx.state, ctx.model

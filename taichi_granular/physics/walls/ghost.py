@@ -16,6 +16,7 @@ Ghost pressure, per wall (``ghost_pressure``):
 import taichi as ti
 
 from ...state import FieldSpec
+from ..stage import Stage
 
 
 @ti.data_oriented
@@ -25,11 +26,13 @@ class NoWalls:
     name = "none"
     fields = ()
 
+    @classmethod
+    def position_stage_classes(cls):
+        return []
+
     def __init__(self, state):
         self.state = state
 
-    def stages(self):
-        return []
 
     @ti.func
     def state_index(self, i, j):
@@ -47,6 +50,10 @@ class NoWalls:
 @ti.data_oriented
 class GhostWalls(NoWalls):
     name = "ghost"
+
+    @classmethod
+    def position_stage_classes(cls):
+        return [WallImpermeability]
     fields = (
         FieldSpec("wall_normal", "vector", "unit normal of the ghost's wall, into the material", "-", "wall"),
         FieldSpec("wall_distance", "scalar", "d_j, distance of the ghost behind its wall [M34]", "m", "wall"),
@@ -84,3 +91,54 @@ class GhostWalls(NoWalls):
             p = self.state.pressure[i] - self.state.density[i] * self.state.wall_pressure_gradient[w] * \
                 x_ij.dot(self.state.wall_normal[w])
         return p
+
+
+@ti.data_oriented
+class WallImpermeability(Stage):
+    """Keeps material on its side of every wall plane (a safeguard for disordered flow).
+
+    Fixed ghosts hold a lattice-ordered layer at rest exactly, but once rows near a wall
+    interpenetrate (sheared granular flow) a particle can slip through a gap of the ghost
+    lattice. After every position update, a material particle found less than
+    ``min_distance`` (dp/4) from a wall plane, inside that wall's box, is put back at
+    min_distance and its velocity towards the wall is removed. Counted in ``corrections``.
+    """
+
+    name = "wall_impermeability"
+    category = "walls"
+    equation = "no-penetration"
+
+    def __init__(self, ctx):
+        self.state = ctx.state
+        walls = ctx.scene.walls
+        dim = ctx.scene.dimension
+        self.n_walls = len(walls)
+        self.normal = [tuple(w.normal) for w in walls]
+        self.point = [tuple(w.point) for w in walls]
+        self.lower = [tuple(w.lower if w.lower is not None else ctx.scene.domain.lower) for w in walls]
+        self.upper = [tuple(w.upper if w.upper is not None else ctx.scene.domain.upper) for w in walls]
+        self.dim = dim
+        self.min_distance = 0.25 * ctx.scene.numerics.particle_spacing
+        self.corrections = ti.field(ti.i32, shape=())
+
+    @ti.kernel
+    def _run(self):
+        for i in range(self.state.n_material):
+            for w in ti.static(range(self.n_walls)):
+                n = ti.Vector(self.normal[w])
+                x = self.state.position[i]
+                inside = True
+                for a in ti.static(range(self.dim)):
+                    if n[a] == 0.0 and (x[a] < self.lower[w][a] or x[a] > self.upper[w][a]):
+                        inside = False
+                d = (x - ti.Vector(self.point[w])).dot(n)
+                if inside and d < self.min_distance:
+                    self.state.position[i] = x + (self.min_distance - d) * n
+                    v = self.state.velocity[i]
+                    vn = v.dot(n)
+                    if vn < 0.0:
+                        self.state.velocity[i] = v - vn * n
+                    self.corrections[None] += 1
+
+    def run(self) -> None:
+        self._run()
