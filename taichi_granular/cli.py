@@ -47,8 +47,8 @@ def cmd_describe(args) -> int:
     itemsize = 8 if scene.precision == "f64" else 4
     print("fields:")
     for name, scope, shape, nbytes in state.memory_table(itemsize):
-        print(f"  {name:<18} {scope:<9} {shape:<7} {nbytes / 1024:10.1f} KiB")
-    print(f"  {'neighbour grid':<36} {scheme.grid.memory_bytes() / 1024:10.1f} KiB")
+        print(f"  {name:<24} {scope:<9} {shape:<7} {nbytes / 1024:10.1f} KiB")
+    print(f"  {'neighbour grid':<42} {scheme.grid.memory_bytes() / 1024:10.1f} KiB")
     print(f"total field memory: {scheme.memory_bytes() / 2**20:.2f} MiB")
     scheme.evaluate_rates()
     print(f"estimated time step: {scheme.stable_time_step():.3g} s")

@@ -11,7 +11,14 @@ Morris/Cleary pairwise viscous term and gravity,
 ``stress_divergence`` -- the stress form [A12] / [A20] used by every model:
     dv_i/dt = g + sum_j m_j (sigma_i/rho_i^2 + sigma_j/rho_j^2) . grad_i W_ij,
     sigma = -p I + s, s the model's deviatoric stress (2 eta dev(eps) for mu(I)).
-  With kernel gradient renormalisation it is exact for linear stress fields.
+  With kernel gradient renormalisation it is exact for linear stress fields. Because the
+  viscous stress is built from an SPH velocity gradient, a velocity pattern alternating from
+  particle to particle has zero gradient and the stress form alone never damps it (measured:
+  a sheared layer fills with such noise within ~1 s). So the stress form adds the pairwise
+  viscous term of [M27] applied to the velocity *residual*
+      v_ij - (grad v_i + grad v_j)/2 . x_ij,
+  which vanishes for every quadratic velocity field (the smooth flow is left to the stress)
+  and damps the particle-scale modes; like the rest it is antisymmetric in (i, j).
 
 Both sums are antisymmetric in (i, j): momentum is conserved to round-off between material
 particles.
