@@ -30,8 +30,6 @@ class _Update(Stage):
     category = "integration"
     fields = START_FIELDS
 
-    def __init__(self, ctx):
-        self.state, self.grid = ctx.state, ctx.grid
 
     @ti.func
     def wrap(self, i):
@@ -116,7 +114,7 @@ class StableTimeStep(Stage):
     equation = "[M39]"
 
     def __init__(self, ctx):
-        self.state, self.model = ctx.state, ctx.model
+        super().__init__(ctx)
         self.cfl = ctx.scene.numerics.cfl
         self.result = ti.field(float, shape=())
 
@@ -125,9 +123,6 @@ class StableTimeStep(Stage):
         self.result[None] = 1e30
         for i in range(self.state.n_material):
             ti.atomic_min(self.result[None], self.model.stable_time_step(i))
-
-    def run(self) -> None:
-        self._run()
 
     def value(self) -> float:
         return self.cfl * float(self.result[None])

@@ -167,8 +167,5 @@ class NeighbourSearch(Stage):
     category = "neighbours"
     equation = "cell-linked list"
 
-    def __init__(self, ctx):
-        self.grid = ctx.grid
-
     def run(self) -> None:
         self.grid.build()

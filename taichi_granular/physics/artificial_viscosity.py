@@ -17,8 +17,7 @@ class ArtificialViscosity(Stage):
     equation = "[M38]"
 
     def __init__(self, ctx):
-        self.state, self.grid, self.gradient, self.walls = ctx.state, ctx.grid, ctx.gradient, ctx.walls
-        self.model = ctx.model
+        super().__init__(ctx)
         av = ctx.scene.numerics.artificial_viscosity
         self.alpha, self.beta = av.alpha, av.beta
         self.h = ctx.smoothing.h
@@ -42,6 +41,3 @@ class ArtificialViscosity(Stage):
             acc = ti.Vector.zero(float, self.state.dim)
             self.grid.for_each_neighbor(i, self.pair, acc)
             self.state.acceleration[i] += acc
-
-    def run(self) -> None:
-        self._run()

@@ -10,9 +10,6 @@ class Continuity(Stage):
     category = "density"
     equation = "[M26]"
 
-    def __init__(self, ctx):
-        self.state, self.grid, self.gradient, self.walls = ctx.state, ctx.grid, ctx.gradient, ctx.walls
-
     @ti.func
     def pair(self, i, j, x_ij, r, rate: ti.template()):
         v_ij = self.walls.relative_velocity(i, j, x_ij)
@@ -24,6 +21,3 @@ class Continuity(Stage):
             rate = 0.0
             self.grid.for_each_neighbor(i, self.pair, rate)
             self.state.density_rate[i] = rate
-
-    def run(self) -> None:
-        self._run()

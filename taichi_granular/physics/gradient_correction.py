@@ -95,7 +95,7 @@ class GradientCorrection(Stage):
     fields = CorrectedGradient.fields
 
     def __init__(self, ctx):
-        self.state, self.grid, self.smoothing, self.walls = ctx.state, ctx.grid, ctx.smoothing, ctx.walls
+        super().__init__(ctx)
         self.dim = ctx.state.dim
         self.min_determinant = CorrectedGradient.min_determinant
         self.scalar = ctx.scene.numerics.gradient_correction == "scalar"
@@ -118,9 +118,6 @@ class GradientCorrection(Stage):
                 else:
                     L = moment.inverse()
             self.state.gradient_correction[i] = L
-
-    def run(self) -> None:
-        self._run()
 
 
 GRADIENTS = {"none": PlainGradient, "scalar": CorrectedGradient, "matrix": CorrectedGradient}

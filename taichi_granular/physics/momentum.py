@@ -33,12 +33,23 @@ class _Momentum(Stage):
     category = "forces"
 
     def __init__(self, ctx):
-        self.state, self.grid, self.walls, self.model = ctx.state, ctx.grid, ctx.walls, ctx.model
-        self.gradient = ctx.gradient
+        super().__init__(ctx)
         self.dim = ctx.state.dim
         self.gravity = ti.Vector.field(self.dim, float, shape=())
         self.gravity[None] = ctx.scene.gravity_vector
         self.eps2 = 0.01 * ctx.smoothing.h**2  # keeps r^2 away from zero [M27]
+
+    @ti.func
+    def viscous_coefficient(self, i, j, k, v_ij, x_ij, r):
+        """m_j 2(d+2) eta_ij (v_ij . x_ij) / (rho_i rho_j (r^2 + 0.01 h^2)) of [M27], with the
+        harmonic mean eta_ij = 2 eta_i eta_j/(eta_i + eta_j)  [m^2/s^2, times grad W]."""
+        s = self.state
+        eta_i, eta_j = s.viscosity[i], s.viscosity[k]
+        eta_ij = 0.0
+        if eta_i + eta_j > 0.0:
+            eta_ij = 2.0 * eta_i * eta_j / (eta_i + eta_j)
+        return s.mass[j] * 2.0 * (self.dim + 2) * eta_ij * v_ij.dot(x_ij) / (
+            s.density[i] * s.density[k] * (r * r + self.eps2))
 
     @ti.kernel
     def _run(self):
@@ -46,9 +57,6 @@ class _Momentum(Stage):
             acc = self.gravity[None]
             self.grid.for_each_neighbor(i, self.pair, acc)
             self.state.acceleration[i] = acc
-
-    def run(self) -> None:
-        self._run()
 
 
 @ti.data_oriented
@@ -60,15 +68,11 @@ class ViscousMomentum(_Momentum):
     def pair(self, i, j, x_ij, r, acc: ti.template()):
         s = self.state
         k = self.walls.state_index(i, j)
-        rho_i, rho_j = s.density[i], s.density[k]
-        eta_i, eta_j = s.viscosity[i], s.viscosity[k]
-        eta_ij = 0.0
-        if eta_i + eta_j > 0.0:
-            eta_ij = 2.0 * eta_i * eta_j / (eta_i + eta_j)
         v_ij = self.walls.relative_velocity(i, j, x_ij)
-        pressure_term = -(s.pressure[i] / rho_i**2 + self.walls.pressure(i, j, x_ij) / rho_j**2)
-        viscous_term = 2.0 * (self.dim + 2) * eta_ij * v_ij.dot(x_ij) / (rho_i * rho_j * (r * r + self.eps2))
-        acc += s.mass[j] * (pressure_term + viscous_term) * self.gradient.pairwise(i, j, x_ij, r)
+        pressure_term = -s.mass[j] * (s.pressure[i] / s.density[i] ** 2
+                                      + self.walls.pressure(i, j, x_ij) / s.density[k] ** 2)
+        acc += (pressure_term + self.viscous_coefficient(i, j, k, v_ij, x_ij, r)) * \
+            self.gradient.pairwise(i, j, x_ij, r)
 
 
 @ti.data_oriented
@@ -87,13 +91,9 @@ class StressMomentum(_Momentum):
         grad_w = self.gradient.pairwise(i, j, x_ij, r)
         acc += s.mass[j] * (term @ grad_w)
         # pairwise viscous damping of the velocity residual (zero for quadratic fields)
-        v_res = self.walls.relative_velocity(i, j, x_ij) - 0.5 * (s.velocity_gradient[i] + s.velocity_gradient[k]) @ x_ij
-        eta_i, eta_j = s.viscosity[i], s.viscosity[k]
-        eta_ij = 0.0
-        if eta_i + eta_j > 0.0:
-            eta_ij = 2.0 * eta_i * eta_j / (eta_i + eta_j)
-        acc += s.mass[j] * 2.0 * (self.dim + 2) * eta_ij * v_res.dot(x_ij) / (
-            s.density[i] * s.density[k] * (r * r + self.eps2)) * grad_w
+        v_residual = self.walls.relative_velocity(i, j, x_ij) - \
+            0.5 * (s.velocity_gradient[i] + s.velocity_gradient[k]) @ x_ij
+        acc += self.viscous_coefficient(i, j, k, v_residual, x_ij, r) * grad_w
 
 
 MOMENTUM = {"viscous_pair": ViscousMomentum, "stress_divergence": StressMomentum}

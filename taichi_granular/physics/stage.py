@@ -24,15 +24,20 @@ class Context:
 
 class Stage:
     """Base class. Subclasses set ``name``, ``category``, ``equation`` and ``fields``
-    (the FieldSpecs they need allocated) and implement ``run()`` (one kernel call)."""
+    (the FieldSpecs they need allocated) and define the kernel ``_run`` (one launch), or
+    override ``run``. The context's parts are at hand as attributes."""
 
     name = "stage"
     category = "forces"
     equation = ""
     fields: Tuple[FieldSpec, ...] = ()
 
-    def run(self) -> None:  # pragma: no cover - abstract
-        raise NotImplementedError
+    def __init__(self, ctx: Context):
+        self.state, self.grid, self.walls, self.model = ctx.state, ctx.grid, ctx.walls, ctx.model
+        self.smoothing, self.gradient = ctx.smoothing, ctx.gradient
+
+    def run(self) -> None:
+        self._run()
 
     def describe(self) -> str:
         eq = f" {self.equation}" if self.equation else ""

@@ -34,7 +34,7 @@ class StrainRate(Stage):
                         "material"))
 
     def __init__(self, ctx):
-        self.state, self.grid, self.gradient, self.walls = ctx.state, ctx.grid, ctx.gradient, ctx.walls
+        super().__init__(ctx)
         self.dim = ctx.state.dim
 
     @ti.func
@@ -51,6 +51,3 @@ class StrainRate(Stage):
             self.grid.for_each_neighbor(i, self.pair, gradient)
             self.state.velocity_gradient[i] = gradient
             self.state.strain_rate[i] = strain_rate_modulus(gradient)
-
-    def run(self) -> None:
-        self._run()

@@ -194,9 +194,6 @@ class GrainDensityPressure(Stage):
     category = "eos"
     equation = "[M44] [M41]"
 
-    def __init__(self, ctx):
-        self.state, self.model = ctx.state, ctx.model
-
     @ti.kernel
     def _run(self):
         for i in range(self.state.n_material):
@@ -204,9 +201,6 @@ class GrainDensityPressure(Stage):
             t = self.model.grain_compression(rho_star, self.state.strain_rate[i])
             self.state.grain_density[i] = self.model.rho_s0 * (1.0 + t * t)
             self.state.pressure[i] = self.model.pressure_of(t)
-
-    def run(self) -> None:
-        self._run()
 
 
 @ti.data_oriented
@@ -218,14 +212,8 @@ class RegularisedViscosity(Stage):
     equation = "[M47]-[M55]"
     fields = (FieldSpec("viscosity", "scalar", "regularised viscosity eta_hat", "Pa s", "material"),)
 
-    def __init__(self, ctx):
-        self.state, self.model = ctx.state, ctx.model
-
     @ti.kernel
     def _run(self):
         for i in range(self.state.n_material):
             self.state.viscosity[i] = self.model.regularised_viscosity(self.state.pressure[i],
                                                                        self.state.strain_rate[i])
-
-    def run(self) -> None:
-        self._run()

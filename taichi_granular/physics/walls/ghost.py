@@ -109,7 +109,7 @@ class WallImpermeability(Stage):
     equation = "no-penetration"
 
     def __init__(self, ctx):
-        self.state = ctx.state
+        super().__init__(ctx)
         walls = ctx.scene.walls
         dim = ctx.scene.dimension
         self.n_walls = len(walls)
@@ -139,6 +139,3 @@ class WallImpermeability(Stage):
                     if vn < 0.0:
                         self.state.velocity[i] = v - vn * n
                     self.corrections[None] += 1
-
-    def run(self) -> None:
-        self._run()
