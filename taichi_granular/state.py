@@ -101,7 +101,9 @@ class ParticleState:
         for name, array in arrays.items():
             if name not in self.specs:
                 raise KeyError(f"state has no field {name!r}")
-            self.field(name).from_numpy(np.ascontiguousarray(array))
+            f = self.field(name)
+            dtype = ti.lang.util.to_numpy_type(f.dtype)  # f32 fields take float32 arrays
+            f.from_numpy(np.ascontiguousarray(array, dtype=dtype))
 
     def to_numpy(self, names: Iterable[str] = None) -> Dict[str, np.ndarray]:
         names = list(self.specs) if names is None else names
