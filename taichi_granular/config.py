@@ -206,9 +206,11 @@ class Wall:
     lower: Optional[Tuple[float, ...]] = _key("lower corner of the box that clips the wall (default domain)", None, "m")
     upper: Optional[Tuple[float, ...]] = _key("upper corner of the box that clips the wall (default domain)", None, "m")
     max_velocity_factor: float = _key(
-        "beta_max of [M36]: 1.5 (Morris et al. 1997) or 1 (zero ghost velocity)", 1.5, "-")
-    ghost_pressure: Literal["hydrostatic", "mirror"] = _key(
-        "mirror: p_j = p_i as in [M]; hydrostatic: plus rho_i g_n (d_i + d_j) along the normal", "hydrostatic")
+        "beta_max of [M36]; 6 lets the three ghost rows extrapolate a linear profile exactly for the "
+        "first material row (Morris et al. 1997 used 1.5; 1 means zero ghost velocity)", 6.0, "-")
+    ghost_stress: Literal["extrapolated", "mirror"] = _key(
+        "mirror: sigma_j = sigma_i as in [M]; extrapolated: the traction on planes parallel to the "
+        "wall grows by rho_i g (d_i + d_j) (the static momentum balance across the wall)", "extrapolated")
 
     def check(self, path: str, dim: int) -> None:
         _check_vector(f"{path}.normal", self.normal, dim)
@@ -242,6 +244,30 @@ class ArtificialViscosity:
 
 
 @dataclass(frozen=True, kw_only=True)
+class ParticleShifting:
+    """Particle shifting (after Lind et al. 2012): each step a particle moves by
+    dr_i = -coefficient h c_i dt grad C_i down its concentration gradient, its velocity is
+    carried along by a Taylor correction, and free-surface particles do not shift.
+    coefficient = 0 removes the stage altogether."""
+
+    coefficient: float = _key("zeta in dr = -zeta h c dt grad C (0 = off; 0.2 keeps sheared layers ordered)",
+                              0.2, "-")
+    free_surface_threshold: float = _key(
+        "particles whose kernel sum (Shepard) falls below this are free-surface and do not shift", 0.9, "-")
+
+    def check(self, path: str) -> None:
+        if not (0.0 <= self.coefficient <= 1.0):
+            raise ConfigError(f"{path}.coefficient", f"must lie in [0, 1], got {self.coefficient}")
+        if not (0.5 <= self.free_surface_threshold <= 1.0):
+            raise ConfigError(f"{path}.free_surface_threshold",
+                              f"must lie in [0.5, 1], got {self.free_surface_threshold}")
+
+    @property
+    def enabled(self) -> bool:
+        return self.coefficient > 0
+
+
+@dataclass(frozen=True, kw_only=True)
 class Numerics:
     particle_spacing: float = _key("dp, initial lattice spacing of particles", unit="m")
     smoothing_length_ratio: float = _key("h/dp", 1.3, "-")
@@ -256,6 +282,8 @@ class Numerics:
     gradient_correction: Literal["scalar", "matrix", "none"] = _key(
         "kernel gradient renormalisation: scalar d/tr(M), full matrix M^-1, or none", "scalar")
     artificial_viscosity: ArtificialViscosity = _key("Monaghan artificial viscosity [M38]", ArtificialViscosity())
+    particle_shifting: ParticleShifting = _key("particle shifting against particle-scale disorder",
+                                               ParticleShifting())
     min_time_step: float = _key("the run stops if the stable time step falls below this", 1e-9, "s")
 
     def check(self, path: str) -> None:
@@ -266,6 +294,7 @@ class Numerics:
             raise ConfigError(f"{path}.cfl", f"must lie in (0, 1] for a stable explicit step, got {self.cfl}")
         _positive(f"{path}.min_time_step", self.min_time_step)
         self.artificial_viscosity.check(f"{path}.artificial_viscosity")
+        self.particle_shifting.check(f"{path}.particle_shifting")
 
     @property
     def smoothing_length(self) -> float:

@@ -30,6 +30,10 @@ class _Update(Stage):
     category = "integration"
     fields = START_FIELDS
 
+    def __init__(self, ctx):
+        super().__init__(ctx)
+        self.shifting = ctx.scene.numerics.particle_shifting.enabled
+        self.taylor_velocity = self.shifting and "velocity_gradient" in ctx.state.specs
 
     @ti.func
     def wrap(self, i):
@@ -49,10 +53,17 @@ class _Update(Stage):
 
     @ti.kernel
     def full_step(self, dt: float):
-        """v(n+1) = v(n) + dt a; x(n+1) = x(n) + dt (v(n) + v(n+1))/2; rho(n+1) = rho(n) + dt d rho/dt."""
+        """v(n+1) = v(n) + dt a; x(n+1) = x(n) + dt (v(n) + v(n+1))/2; rho(n+1) = rho(n) + dt d rho/dt;
+        then the particle shift, if enabled."""
         for i in range(self.state.n_material):
             v_new = self.state.velocity_start[i] + dt * self.state.acceleration[i]
-            self.state.position[i] = self.state.position_start[i] + 0.5 * dt * (self.state.velocity_start[i] + v_new)
+            x_new = self.state.position_start[i] + 0.5 * dt * (self.state.velocity_start[i] + v_new)
+            if ti.static(self.shifting):  # physics/shifting.py: move by dt u_shift, carry v along
+                shift = dt * self.state.shift_velocity[i]
+                x_new += shift
+                if ti.static(self.taylor_velocity):
+                    v_new += self.state.velocity_gradient[i] @ shift
+            self.state.position[i] = x_new
             self.state.velocity[i] = v_new
             self.state.density[i] = self.state.density_start[i] + dt * self.state.density_rate[i]
             self.wrap(i)

@@ -14,6 +14,7 @@ from .integrators import INTEGRATORS, StableTimeStep
 from .physics.artificial_viscosity import ArtificialViscosity
 from .physics.gradient_correction import GRADIENTS
 from .physics.rheology import MODELS
+from .physics.shifting import ParticleShifting
 from .physics.stage import Context
 from .physics.walls import BOUNDARIES, NoWalls
 from .profiling import StageProfiler
@@ -40,6 +41,8 @@ def rate_stage_classes(scene: Scene, model) -> List[type]:
     classes += model.stage_classes(scene)
     if scene.numerics.artificial_viscosity.enabled:
         classes.append(ArtificialViscosity)
+    if scene.numerics.particle_shifting.enabled:
+        classes.append(ParticleShifting)
     return classes
 
 
@@ -68,7 +71,7 @@ class Scheme:
         self.smoothing = make_smoothing(scene.numerics.smoothing_function, h, dim)
         self.grid = NeighborGrid(self.state.position, scene.domain.lower, scene.domain.upper,
                                  scene.domain.periodic_mask, self.smoothing.support)
-        self.walls = walls_cls(self.state)
+        self.walls = walls_cls(self.state, scene.gravity_vector)
         ctx = Context(state=self.state, grid=self.grid, smoothing=self.smoothing, walls=self.walls,
                       model=model, scene=scene)
         ctx.gradient = self.gradient = gradient_cls(ctx)

@@ -39,6 +39,8 @@ def test_momentum_is_conserved_to_round_off_in_a_periodic_box():
     data["particles"][0].update(lower=[0.0, 0.0], upper=[0.06, 0.06], initial_stress="zero")
     data["walls"] = []
     data["gravity"]["magnitude"] = 0.0
+    # particle shifting carries velocity by a Taylor correction, which is not pairwise
+    data["numerics"]["particle_shifting"] = {"coefficient": 0.0}
     sim = Simulation(build(data))
     rng = np.random.default_rng(3)
     n = sim.state.n_material
@@ -85,8 +87,12 @@ def test_layer_at_rest_keeps_hydrostatic_pressure(momentum, correction, h_over_d
     p = sim.state.pressure.to_numpy()[:n]
     g, H = 9.81, 0.05
     assert np.abs(v).max() < 1e-3 * np.sqrt(g * H)
-    assert abs(x[:, 1].mean() - y0.mean()) < 1e-4 * H
     rho = sim.state.density.to_numpy()[:n]
+    # The lattice starts at uniform spacing although its density grows with depth; particle
+    # shifting lets it settle towards the spacing that compression implies. The full settlement
+    # of the centre of mass would be ~ K_t (rho g H / 2) H / 2; allow a quarter of it.
+    settlement = 1.5e-5 * rho.mean() * g * H / 2 * H / 2
+    assert abs(x[:, 1].mean() - y0.mean()) < 0.25 * settlement
     column_weight = rho.mean() * g * H
     for level in np.unique(np.round(y0, 6)):
         mask = np.isclose(y0, level)

@@ -86,7 +86,7 @@ class StressMomentum(_Momentum):
         k = self.walls.state_index(i, j)
         identity = ti.Matrix.identity(float, self.dim)
         sigma_i = self.model.deviatoric_stress(i) - s.pressure[i] * identity
-        sigma_j = self.model.deviatoric_stress(k) - self.walls.pressure(i, j, x_ij) * identity
+        sigma_j = self.walls.stress(i, j, x_ij, self.model.deviatoric_stress(k) - s.pressure[k] * identity)
         term = sigma_i / s.density[i] ** 2 + sigma_j / s.density[k] ** 2
         grad_w = self.gradient.pairwise(i, j, x_ij, r)
         acc += s.mass[j] * (term @ grad_w)

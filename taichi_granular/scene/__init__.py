@@ -144,7 +144,7 @@ def build_initial(scene: Scene, model) -> InitialParticles:
     _check_inside_domain(x_mat, scene, lambda i: f"particles[{block_of[i]}]", "material outside the domain")
     n_mat = len(x_mat)
 
-    wall_pos, wall_depth, wall_normal, wall_beta, wall_gn, wall_of = [], [], [], [], [], []
+    wall_pos, wall_depth, wall_normal, wall_beta, wall_extrap, wall_of = [], [], [], [], [], []
     layers = int(math.ceil(2.0 * scene.numerics.smoothing_length / dp - 1e-9))
     for w, wall in enumerate(scene.walls):
         lower = wall.lower if wall.lower is not None else scene.domain.lower
@@ -162,15 +162,14 @@ def build_initial(scene: Scene, model) -> InitialParticles:
         wall_depth.append(depth)
         wall_normal.append(np.tile(np.array(wall.normal, float), (len(pts), 1)))
         wall_beta.append(np.full(len(pts), wall.max_velocity_factor))
-        g_dot_n = float(g @ np.array(wall.normal)) if wall.ghost_pressure == "hydrostatic" else 0.0
-        wall_gn.append(np.full(len(pts), g_dot_n))
+        wall_extrap.append(np.full(len(pts), 1.0 if wall.ghost_stress == "extrapolated" else 0.0))
         wall_of.append(np.full(len(pts), w))
     if wall_pos:
         x_wall, keep = _unique_points(np.concatenate(wall_pos), dp)
         wall_fields = {"wall_distance": np.concatenate(wall_depth)[keep],
                        "wall_normal": np.concatenate(wall_normal)[keep],
                        "wall_beta_max": np.concatenate(wall_beta)[keep],
-                       "wall_pressure_gradient": np.concatenate(wall_gn)[keep]}
+                       "wall_extrapolation": np.concatenate(wall_extrap)[keep]}
         wall_of_arr = np.concatenate(wall_of)[keep]
         _check_inside_domain(x_wall, scene, lambda i: f"walls[{wall_of_arr[i]}]",
                              "wall particles reach outside the domain; enlarge domain")
