@@ -95,6 +95,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--config", help="scene file (default: the bundled one)")
     p.add_argument("--out", help="output directory (default: output/validate/<case>)")
     p.add_argument("--reuse", action="store_true", help="evaluate existing output instead of running")
+    p.add_argument("--start", choices=["analytic", "rest"], default="analytic",
+                   help="inclined plane: start from the [M56] profile (reaches the discrete steady state "
+                        "in ~20 s) or from rest (~60 s, as [M] did)")
+    p.add_argument("--window", type=float, default=5.0, help="average over the last WINDOW seconds [s]")
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="override a scene key")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=cmd_validate)

@@ -280,8 +280,11 @@ class Numerics:
         "stress_divergence: sum m (sigma_i/rho_i^2 + sigma_j/rho_j^2) grad W; viscous_pair: [M27]",
         "stress_divergence")
     gradient_correction: Literal["scalar", "matrix", "none"] = _key(
-        "kernel gradient renormalisation: scalar d/tr(M), full matrix M^-1, or none", "scalar")
+        "kernel gradient renormalisation: full matrix M^-1 (exact for linear fields, also at walls and "
+        "free surfaces), scalar d/tr(M), or none", "matrix")
     artificial_viscosity: ArtificialViscosity = _key("Monaghan artificial viscosity [M38]", ArtificialViscosity())
+    density_diffusion: float = _key(
+        "delta of the delta-SPH density diffusion term in the continuity equation (0 = off)", 0.02, "-")
     particle_shifting: ParticleShifting = _key("particle shifting against particle-scale disorder",
                                                ParticleShifting())
     min_time_step: float = _key("the run stops if the stable time step falls below this", 1e-9, "s")
@@ -295,6 +298,8 @@ class Numerics:
         _positive(f"{path}.min_time_step", self.min_time_step)
         self.artificial_viscosity.check(f"{path}.artificial_viscosity")
         self.particle_shifting.check(f"{path}.particle_shifting")
+        if not 0.0 <= self.density_diffusion <= 1.0:
+            raise ConfigError(f"{path}.density_diffusion", f"must lie in [0, 1], got {self.density_diffusion}")
 
     @property
     def smoothing_length(self) -> float:

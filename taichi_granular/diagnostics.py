@@ -2,6 +2,8 @@
 import numpy as np
 import taichi as ti
 
+from . import runtime
+
 GUARD_CODES = {
     1: "non-finite position",
     2: "non-finite velocity",
@@ -26,6 +28,7 @@ class Diagnostics:
         self.kinetic_energy[None] = 0.0
         self.max_speed[None] = 0.0
         self.max_density_error[None] = 0.0
+        ti.loop_config(serialize=runtime.serial_loops)
         for i in range(self.state.n_material):
             v = self.state.velocity[i]
             self.kinetic_energy[None] += 0.5 * self.state.mass[i] * v.norm_sqr()
@@ -59,6 +62,7 @@ class Guard:
     def _check(self) -> ti.i32:
         n = self.state.n_material
         self.first_bad[None] = n
+        ti.loop_config(serialize=runtime.serial_loops)
         for i in range(n):
             code = 0
             x = self.state.position[i]

@@ -13,6 +13,8 @@ their own stages) and wrap positions along periodic axes.
 """
 import taichi as ti
 
+from . import runtime
+
 from .physics.stage import Stage
 from .state import FieldSpec
 
@@ -42,6 +44,7 @@ class _Update(Stage):
     @ti.kernel
     def half_step(self, dt: float):
         """Keep (x, v, rho) at n; x += dt/2 v(n); v += dt/2 a; rho += dt/2 d rho/dt."""
+        ti.loop_config(serialize=runtime.serial_loops)
         for i in range(self.state.n_material):
             self.state.position_start[i] = self.state.position[i]
             self.state.velocity_start[i] = self.state.velocity[i]
@@ -55,6 +58,7 @@ class _Update(Stage):
     def full_step(self, dt: float):
         """v(n+1) = v(n) + dt a; x(n+1) = x(n) + dt (v(n) + v(n+1))/2; rho(n+1) = rho(n) + dt d rho/dt;
         then the particle shift, if enabled."""
+        ti.loop_config(serialize=runtime.serial_loops)
         for i in range(self.state.n_material):
             v_new = self.state.velocity_start[i] + dt * self.state.acceleration[i]
             x_new = self.state.position_start[i] + 0.5 * dt * (self.state.velocity_start[i] + v_new)
@@ -132,6 +136,7 @@ class StableTimeStep(Stage):
     @ti.kernel
     def _run(self):
         self.result[None] = 1e30
+        ti.loop_config(serialize=runtime.serial_loops)
         for i in range(self.state.n_material):
             ti.atomic_min(self.result[None], self.model.stable_time_step(i))
 

@@ -15,6 +15,8 @@ from typing import Sequence
 
 import taichi as ti
 
+from . import runtime
+
 SCAN_BLOCK = 256  # cells per block of the blocked prefix scan
 
 
@@ -91,13 +93,16 @@ class NeighborGrid:
     @ti.kernel
     def build(self):
         """Counting sort of all particles by cell (four passes, one launch)."""
+        ti.loop_config(serialize=runtime.serial_loops)
         for c in range(self.n_cells):
             self.cell_count[c] = 0
+        ti.loop_config(serialize=runtime.serial_loops)
         for i in range(self.n_particles):
             c = self.flat_index(self.cell_coord(self.position[i]))
             self.particle_cell[i] = c
             ti.atomic_add(self.cell_count[c], 1)
         # exclusive scan: per block in parallel, then the block totals serially, then offsets
+        ti.loop_config(serialize=runtime.serial_loops)
         for b in range(self.n_blocks):
             running = 0
             for k in range(SCAN_BLOCK):
@@ -113,13 +118,16 @@ class NeighborGrid:
             self.block_sum[b] = total
             total += block_total
         self.cell_start[self.n_cells] = total
+        ti.loop_config(serialize=runtime.serial_loops)
         for c in range(self.n_cells):
             self.cell_start[c] += self.block_sum[c // SCAN_BLOCK]
             self.cursor[c] = self.cell_start[c]
+        ti.loop_config(serialize=runtime.serial_loops)
         for i in range(self.n_particles):
             slot = ti.atomic_add(self.cursor[self.particle_cell[i]], 1)
             self.sorted_ids[slot] = i
         # insertion sort inside each cell (a handful of particles) -> deterministic order
+        ti.loop_config(serialize=runtime.serial_loops)
         for c in range(self.n_cells):
             begin = self.cell_start[c]
             end = self.cell_start[c + 1]

@@ -9,6 +9,7 @@ from typing import List
 
 import numpy as np
 
+from . import runtime
 from .neighbors import NeighborGrid, NeighbourSearch
 from .integrators import INTEGRATORS, StableTimeStep
 from .physics.artificial_viscosity import ArtificialViscosity
@@ -63,6 +64,7 @@ class Scheme:
         specs = merge_specs([model.fields, walls_cls.fields, integrator_cls.fields, gradient_cls.fields]
                             + [cls.fields for cls in rate_classes])
         ini = self.initial
+        runtime.choose_loops(ini.n_total)
         self.state = ParticleState(dim, ini.n_material, ini.n_wall, specs)
         self.state.load({"position": ini.position, "velocity": ini.velocity, "mass": ini.mass,
                          "density": ini.density, "pressure": ini.pressure, **ini.wall_fields})

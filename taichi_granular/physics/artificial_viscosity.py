@@ -7,6 +7,8 @@ dv_i/dt -= sum_j m_j Pi_ij grad_i W_ij.
 """
 import taichi as ti
 
+from .. import runtime
+
 from .stage import Stage
 
 
@@ -37,6 +39,7 @@ class ArtificialViscosity(Stage):
 
     @ti.kernel
     def _run(self):
+        ti.loop_config(serialize=runtime.serial_loops)
         for i in range(self.state.n_material):
             acc = ti.Vector.zero(float, self.state.dim)
             self.grid.for_each_neighbor(i, self.pair, acc)

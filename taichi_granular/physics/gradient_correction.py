@@ -23,6 +23,8 @@ Without correction both are the plain grad_i W_ij and no field is allocated.
 """
 import taichi as ti
 
+from .. import runtime
+
 from ..state import FieldSpec
 from .stage import Stage
 
@@ -108,6 +110,7 @@ class GradientCorrection(Stage):
 
     @ti.kernel
     def _run(self):
+        ti.loop_config(serialize=runtime.serial_loops)
         for i in range(self.state.n_material):
             moment = ti.Matrix.zero(float, self.dim, self.dim)
             self.grid.for_each_neighbor(i, self.pair, moment)

@@ -25,6 +25,8 @@ particles.
 """
 import taichi as ti
 
+from .. import runtime
+
 from .stage import Stage
 
 
@@ -53,6 +55,7 @@ class _Momentum(Stage):
 
     @ti.kernel
     def _run(self):
+        ti.loop_config(serialize=runtime.serial_loops)
         for i in range(self.state.n_material):
             acc = self.gravity[None]
             self.grid.for_each_neighbor(i, self.pair, acc)

@@ -25,6 +25,8 @@ zeta CFL h^2 |grad C| ~ 0.1 h for zeta = 0.2, CFL = 0.5 (dt <= CFL h / c).
 """
 import taichi as ti
 
+from .. import runtime
+
 from ..state import FieldSpec
 from .stage import Stage
 
@@ -76,6 +78,7 @@ class ParticleShifting(Stage):
     @ti.kernel
     def kernel_sums(self):
         s = self.state
+        ti.loop_config(serialize=runtime.serial_loops)
         for i in range(s.n_material):
             total = s.mass[i] / s.density[i] * self.smoothing.value(0.0)
             self.grid.for_each_neighbor(i, self.shepard_pair, total)
@@ -84,6 +87,7 @@ class ParticleShifting(Stage):
     @ti.kernel
     def shift(self):
         s = self.state
+        ti.loop_config(serialize=runtime.serial_loops)
         for i in range(s.n_material):
             shift = ti.Vector.zero(float, self.dim)
             if s.kernel_sum[i] >= self.threshold:

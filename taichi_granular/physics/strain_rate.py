@@ -6,6 +6,8 @@ gamma_dot = sqrt(2 eps:eps) (= |dv_x/dz| in simple shear)  [1/s].
 """
 import taichi as ti
 
+from .. import runtime
+
 from ..state import FieldSpec
 from .stage import Stage
 
@@ -46,6 +48,7 @@ class StrainRate(Stage):
 
     @ti.kernel
     def _run(self):
+        ti.loop_config(serialize=runtime.serial_loops)
         for i in range(self.state.n_material):
             gradient = ti.Matrix.zero(float, self.dim, self.dim)
             self.grid.for_each_neighbor(i, self.pair, gradient)

@@ -18,6 +18,8 @@ import math
 import numpy as np
 import taichi as ti
 
+from ... import runtime
+
 from ...state import FieldSpec
 from ...tmath import expm1
 from ..stage import Stage
@@ -196,6 +198,7 @@ class GrainDensityPressure(Stage):
 
     @ti.kernel
     def _run(self):
+        ti.loop_config(serialize=runtime.serial_loops)
         for i in range(self.state.n_material):
             rho_star = self.state.density[i] / self.model.rho_s0
             t = self.model.grain_compression(rho_star, self.state.strain_rate[i])
@@ -214,6 +217,7 @@ class RegularisedViscosity(Stage):
 
     @ti.kernel
     def _run(self):
+        ti.loop_config(serialize=runtime.serial_loops)
         for i in range(self.state.n_material):
             self.state.viscosity[i] = self.model.regularised_viscosity(self.state.pressure[i],
                                                                        self.state.strain_rate[i])

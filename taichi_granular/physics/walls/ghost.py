@@ -23,6 +23,8 @@ and its first row felt a net down-slope force of 5 g sin(theta) (measured).
 """
 import taichi as ti
 
+from ... import runtime
+
 from ...state import FieldSpec
 from ..stage import Stage
 
@@ -149,6 +151,7 @@ class WallImpermeability(Stage):
 
     @ti.kernel
     def _run(self):
+        ti.loop_config(serialize=runtime.serial_loops)
         for i in range(self.state.n_material):
             for w in ti.static(range(self.n_walls)):
                 n = ti.Vector(self.normal[w])
