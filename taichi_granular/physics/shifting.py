@@ -55,25 +55,24 @@ class ParticleShifting(Stage):
 
     @ti.func
     def pair(self, i, j, x_ij, r, acc: ti.template()):
+        """acc[:dim] += V_j (1 + R (W_ij/W(dp))^n) grad W_ij; acc[dim:] += direction to free-surface j."""
         s = self.state
         volume = s.mass[j] / s.density[self.walls.state_index(i, j)]
         w = self.smoothing.value(r)
         weight = 1.0 + ANTI_CLUMPING * (w / self.smoothing.value(self.spacing)) ** ANTI_CLUMPING_POWER
         grad = self.smoothing.gradient(x_ij, r)
+        surface = 0.0
+        if j < s.n_material:
+            if s.kernel_sum[j] < self.threshold:
+                surface = w
         for a in ti.static(range(self.dim)):
             acc[a] += volume * weight * grad[a]
-        acc[self.dim] += volume * w
+            acc[self.dim + a] -= surface * x_ij[a]
 
     @ti.func
     def shepard_pair(self, i, j, x_ij, r, acc: ti.template()):
         s = self.state
         acc += s.mass[j] / s.density[self.walls.state_index(i, j)] * self.smoothing.value(r)
-
-    @ti.func
-    def surface_pair(self, i, j, x_ij, r, towards: ti.template()):
-        if j < self.state.n_material:
-            if self.state.kernel_sum[j] < self.threshold:
-                towards -= x_ij * self.smoothing.value(r)
 
     @ti.kernel
     def kernel_sums(self):
@@ -91,13 +90,13 @@ class ParticleShifting(Stage):
         for i in range(s.n_material):
             shift = ti.Vector.zero(float, self.dim)
             if s.kernel_sum[i] >= self.threshold:
-                acc = ti.Vector.zero(float, self.dim + 1)
+                acc = ti.Vector.zero(float, 2 * self.dim)
                 self.grid.for_each_neighbor(i, self.pair, acc)
                 scale = -self.coefficient * self.h * self.model.sound_speed(i)
+                towards = ti.Vector.zero(float, self.dim)
                 for a in ti.static(range(self.dim)):
                     shift[a] = scale * acc[a]
-                towards = ti.Vector.zero(float, self.dim)
-                self.grid.for_each_neighbor(i, self.surface_pair, towards)
+                    towards[a] = acc[self.dim + a]
                 if towards.norm() > 0.0:
                     n = towards.normalized()
                     shift -= shift.dot(n) * n
