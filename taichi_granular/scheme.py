@@ -15,7 +15,7 @@ from .integrators import INTEGRATORS, StableTimeStep
 from .physics.artificial_viscosity import ArtificialViscosity
 from .physics.gradient_correction import GRADIENTS
 from .physics.rheology import MODELS
-from .physics.shifting import ParticleShifting
+from .physics.shifting import FreeSurface, ParticleShifting
 from .physics.stage import Context
 from .physics.walls import BOUNDARIES, NoWalls
 from .profiling import StageProfiler
@@ -37,6 +37,8 @@ def boundary_class(scene: Scene):
 def rate_stage_classes(scene: Scene, model) -> List[type]:
     """Stages of one rate evaluation, in order."""
     classes = [NeighbourSearch] + GRADIENTS[scene.numerics.gradient_correction].stage_classes()
+    if scene.numerics.particle_shifting.enabled or scene.numerics.density_diffusion > 0:
+        classes.append(FreeSurface)
     walls_cls = boundary_class(scene)
     classes += getattr(walls_cls, "stage_classes", lambda s: [])(scene)
     classes += model.stage_classes(scene)
