@@ -253,8 +253,7 @@ class ParticleShifting:
     coefficient: float = _key("zeta in dr = -zeta h c dt grad C (0 = off; 0.2 keeps sheared layers ordered)",
                               0.2, "-")
     free_surface_threshold: float = _key(
-        "particles whose kernel sum (Shepard) falls below this are free surface: they neither shift "
-        "nor exchange density diffusion", 0.9, "-")
+        "particles whose kernel sum (Shepard) falls below this are free surface and do not shift", 0.9, "-")
 
     def check(self, path: str) -> None:
         if not (0.0 <= self.coefficient <= 1.0):

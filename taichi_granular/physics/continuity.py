@@ -3,12 +3,13 @@ optionally with the density diffusion term of delta-SPH (Molteni & Colagrossi 20
 the hydrostatic part of the density difference removed (Fourtakas et al. 2019):
     + delta h c_0 sum_j 2 (rho_ji - rho_ji^H) (x_ji . grad_i W_ij) / (r_ij^2 + 0.01 h^2) V_j,
     rho_ji^H = rho_i (g . x_ji) / c_0^2   (c_0: the model's reference sound speed),
-a Laplacian of the density between bulk particles: a ghost exchanges nothing (no flux through
-walls) and neither does a free-surface particle (kernel sum below the free-surface threshold,
-physics/shifting.py). Diffusing into the top row ties its density to the rows below, so it
-cannot loosen to p ~ 0; the symmetric stress sum then holds that row up with a pressure of
-~rho g h instead of rho g dp/2 and the whole layer carries that offset (measured: 2.3 % of the
-bed pressure on a 2.5 cm layer, 7 % on Table 2; 0.5 % once surface particles are excluded). Without the hydrostatic
+a Laplacian of the density over the neighbours a particle has; a ghost exchanges nothing (no
+flux through walls). Diffusing into the free-surface row ties its density to the rows below,
+and the layer then carries a pressure offset of ~rho g cos(theta) h (Table 2: +25-30 Pa, 7 % of
+the bed pressure; 2.3 % on a 2.5 cm layer). Excluding free-surface particles from the exchange
+removes the offset on the 2.5 cm layer over 1.5 s but not on Table 2 over 30 s: its top rows
+then loosen as without diffusion and the error turns into -30 Pa and grows (32 % at 25-30 s,
+against 11 % with the exchange; measured), so the exchange stays. Without the hydrostatic
 part the term flattens the weight-induced density gradient (0.7 % over the Table 2 layer),
 which this stiff equation of state turns into a pressure error of up to 2x near the top and
 a layer that swells by 8 % (measured).
@@ -40,7 +41,6 @@ class Continuity(Stage):
         self.eps2 = 0.01 * self.h**2
         self.gravity = tuple(ctx.scene.gravity_vector)
         self.c0 = ctx.model.reference_sound_speed()
-        self.surface = ctx.scene.numerics.particle_shifting.free_surface_threshold
 
     @ti.func
     def pair(self, i, j, x_ij, r, rate: ti.template()):
@@ -49,7 +49,7 @@ class Continuity(Stage):
         grad_w = self.gradient.pairwise(i, j, x_ij, r)
         rate += s.mass[j] * v_ij.dot(grad_w)  # [M26]
         if ti.static(self.diffusion > 0.0):
-            if j < s.n_material and s.kernel_sum[i] >= self.surface and s.kernel_sum[j] >= self.surface:
+            if j < s.n_material:
                 hydrostatic = s.density[i] * ti.Vector(self.gravity).dot(-x_ij) / self.c0**2
                 rate += self.diffusion * self.h * self.c0 * 2.0 * (s.density[j] - s.density[i] - hydrostatic) * \
                     (-x_ij).dot(grad_w) / (r * r + self.eps2) * s.mass[j] / s.density[j]

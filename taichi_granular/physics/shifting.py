@@ -95,8 +95,7 @@ class FreeSurface(Stage):
     """Kernel (Shepard) sum S_i = sum_j V_j W_ij, self and boundary particles included [-].
     S_i falls from ~1 in the bulk to ~0.8 on a free surface (0.79 for the top row of a
     lattice at h/dp = 1.3 with Wendland C2, 1.006 one row below); particles below
-    ``numerics.particle_shifting.free_surface_threshold`` count as free surface, for particle
-    shifting and density diffusion alike."""
+    ``numerics.particle_shifting.free_surface_threshold`` count as free surface."""
 
     name = "free_surface"
     category = "neighbours"
