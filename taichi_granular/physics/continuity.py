@@ -5,7 +5,7 @@ the hydrostatic part of the density difference removed (Fourtakas et al. 2019):
     rho_ji^H = rho_i (g . x_ji) / c_0^2   (c_0: the model's reference sound speed),
 a Laplacian of the density over the neighbours a particle has; a ghost exchanges nothing (no
 flux through walls). Diffusing into the free-surface row ties its density to the rows below,
-and the layer then carries a pressure offset of ~rho g cos(theta) h (Table 2: +25-30 Pa, 7 % of
+and the layer then carries a pressure offset (Table 2: +25-30 Pa, 7 % of
 the bed pressure; 2.3 % on a 2.5 cm layer). Excluding free-surface particles from the exchange
 removes the offset on the 2.5 cm layer over 1.5 s but not on Table 2 over 30 s: its top rows
 then loosen as without diffusion and the error turns into -30 Pa and grows (32 % at 25-30 s,
