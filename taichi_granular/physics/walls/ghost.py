@@ -42,7 +42,6 @@ class NoWalls:
 
     def __init__(self, state, gravity=None):
         self.state = state
-        self.dim = state.dim
         self.gravity = tuple(gravity) if gravity is not None else (0.0,) * state.dim
 
 
@@ -100,12 +99,18 @@ class GhostWalls(NoWalls):
         return v_ij
 
     @ti.func
+    def extrapolation(self, i, j, x_ij):
+        """(n, s) for ghost j seen from material i: the wall normal and s = rho_i n . x_ij
+        (n . x_ij = d_i + d_j), zero for a mirror-stress wall  [kg/m^2]."""
+        w = j - self.state.n_material
+        n = self.state.wall_normal[w]
+        return n, self.state.wall_extrapolation[w] * self.state.density[i] * x_ij.dot(n)
+
+    @ti.func
     def pressure(self, i, j, x_ij):
         p = self.state.pressure[j]
         if j >= self.state.n_material:
-            w = j - self.state.n_material
-            n = self.state.wall_normal[w]
-            s = self.state.wall_extrapolation[w] * self.state.density[i] * x_ij.dot(n)  # n . x_ij = d_i + d_j
+            n, s = self.extrapolation(i, j, x_ij)
             p = self.state.pressure[i] - s * ti.Vector(self.gravity).dot(n)
         return p
 
@@ -113,10 +118,8 @@ class GhostWalls(NoWalls):
     def stress(self, i, j, x_ij, sigma_k):
         sigma = sigma_k
         if j >= self.state.n_material:
-            w = j - self.state.n_material
-            n = self.state.wall_normal[w]
+            n, s = self.extrapolation(i, j, x_ij)
             g = ti.Vector(self.gravity)
-            s = self.state.wall_extrapolation[w] * self.state.density[i] * x_ij.dot(n)
             sigma += s * (g.outer_product(n) + n.outer_product(g) - g.dot(n) * n.outer_product(n))
         return sigma
 
