@@ -1,5 +1,5 @@
 """Particle shifting (physics/shifting.py): zero on a perfect lattice, against the disorder of a
-perturbed one, never along the normal of a free surface."""
+perturbed one, only along a free surface."""
 import numpy as np
 
 from scenes import build, layer
@@ -36,7 +36,7 @@ def test_shift_moves_particles_back_towards_the_lattice():
     assert correlation < -0.5
 
 
-def test_free_surface_particles_do_not_shift_along_the_normal():
+def test_particles_at_a_free_surface_shift_only_along_it():
     data = layer(height=0.03, length=0.05)
     sim = Simulation(build(data))
     n = sim.state.n_material
@@ -49,8 +49,9 @@ def test_free_surface_particles_do_not_shift_along_the_normal():
     y = x[:n, 1]
     top = y > 0.03 - 0.005
     second = (y > 0.03 - 0.010) & ~top
-    assert np.abs(shift[top]).max() == 0.0  # kernel sum below the threshold: no shift at all
-    # tangential only: the normal is the direction to the neighbouring surface particles, which the
-    # along-surface disorder tilts slightly from the vertical (measured: 1 %)
-    assert np.abs(shift[second, 1]).max() < 0.05 * np.abs(shift[second, 0]).max()
-    assert np.abs(shift[second, 0]).max() > 0.0
+    # on the surface the normal is the kernel-sum gradient, below it the direction to the surface
+    # neighbours; the along-surface disorder tilts both slightly from the vertical (measured: 6 %
+    # and 1 % of the tangential shift)
+    for row, tilt in ((top, 0.1), (second, 0.05)):
+        assert np.abs(shift[row, 1]).max() < tilt * np.abs(shift[row, 0]).max()
+        assert np.abs(shift[row, 0]).max() > 0.0

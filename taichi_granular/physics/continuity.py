@@ -51,8 +51,10 @@ class Continuity(Stage):
         if ti.static(self.diffusion > 0.0):
             if j < s.n_material:
                 hydrostatic = s.density[i] * ti.Vector(self.gravity).dot(-x_ij) / self.c0**2
+                # the plain kernel gradient: x_ji . grad W_ij <= 0 for every pair, so the term is a
+                # true diffusion (a corrected gradient can flip the sign of single pairs)
                 rate += self.diffusion * self.h * self.c0 * 2.0 * (s.density[j] - s.density[i] - hydrostatic) * \
-                    (-x_ij).dot(grad_w) / (r * r + self.eps2) * s.mass[j] / s.density[j]
+                    (-x_ij).dot(self.smoothing.gradient(x_ij, r)) / (r * r + self.eps2) * s.mass[j] / s.density[j]
 
     @ti.kernel
     def _run(self):
