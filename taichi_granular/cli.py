@@ -28,6 +28,11 @@ def cmd_run(args) -> int:
     return 0
 
 
+def cmd_render(args) -> int:
+    from .render.cli import render_output
+    return render_output(args)
+
+
 def cmd_describe(args) -> int:
     from . import runtime
     from .scheme import Scheme
@@ -89,6 +94,17 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("describe", help="stage list, fields and memory, time step; runs nothing")
     scene_args(p)
     p.set_defaults(func=cmd_describe)
+
+    p = sub.add_parser("render", help="re-render a run's saved frames to PNG (and GIF/MP4)")
+    p.add_argument("output_dir", help="a run's output directory (holds particles.pvd)")
+    p.add_argument("--colour-by", help="particle field (speed, pressure, inertial_number, ...)")
+    p.add_argument("--range", type=float, nargs=2, metavar=("MIN", "MAX"), help="fixed colour range")
+    p.add_argument("--width", type=int, help="image width [px]")
+    p.add_argument("--out", help="frame directory (default OUTPUT_DIR/frames_<field>)")
+    p.add_argument("--video", help="also join the frames into this .gif or .mp4")
+    p.add_argument("--fps", type=float, default=10.0, help="video frames per second")
+    p.add_argument("--arch", default="cpu", help="Taichi backend for rasterising")
+    p.set_defaults(func=cmd_render)
 
     p = sub.add_parser("validate", help="run a validation case and print its errors")
     p.add_argument("case", choices=["inclined-plane"])

@@ -322,6 +322,59 @@ class Run:
 
 
 @dataclass(frozen=True, kw_only=True)
+class Camera:
+    """Pinhole camera of 3D frames."""
+
+    position: Tuple[float, ...] = _key("eye position", unit="m")
+    look_at: Tuple[float, ...] = _key("point at the centre of the image", unit="m")
+    up: Tuple[float, ...] = _key("direction that appears upwards", (0.0, 0.0, 1.0))
+    field_of_view_deg: float = _key("vertical field of view", 40.0, "deg")
+
+    def check(self, path: str) -> None:
+        for key in ("position", "look_at", "up"):
+            _check_vector(f"{path}.{key}", getattr(self, key), 3)
+        if math.dist(self.position, self.look_at) == 0.0:
+            raise ConfigError(f"{path}.look_at", "must differ from the camera position")
+        if not 1.0 <= self.field_of_view_deg <= 170.0:
+            raise ConfigError(f"{path}.field_of_view_deg", f"must lie in [1, 170] deg, got {self.field_of_view_deg}")
+
+
+@dataclass(frozen=True, kw_only=True)
+class Render:
+    """PNG frames (render/): particles coloured by a field, walls grey, time and colour bar."""
+
+    frames: bool = _key("write a PNG frame at every output time of a run", True)
+    width: int = _key("image width", 800, "px")
+    height: Optional[int] = _key("image height (default: 2D from the view's aspect, 3D 3/4 of the width)", None,
+                                 "px")
+    colour_by: str = _key("particle field to colour by: speed, pressure, inertial_number, any output field "
+                          "(vectors by magnitude)", "speed")
+    range: Optional[Tuple[float, float]] = _key("fixed colour range [min, max] (default: each frame's own)", None)
+    view_lower: Optional[Tuple[float, ...]] = _key("2D: lower corner of the view (default domain)", None, "m")
+    view_upper: Optional[Tuple[float, ...]] = _key("2D: upper corner of the view (default domain)", None, "m")
+    camera: Optional[Camera] = _key("3D: camera (default: from the front-left, above the domain)", None)
+
+    def check(self, path: str, dim: int) -> None:
+        if not 32 <= self.width <= 8192:
+            raise ConfigError(f"{path}.width", f"must lie in [32, 8192] px, got {self.width}")
+        if self.height is not None and not 32 <= self.height <= 8192:
+            raise ConfigError(f"{path}.height", f"must lie in [32, 8192] px, got {self.height}")
+        if self.range is not None and not self.range[0] < self.range[1]:
+            raise ConfigError(f"{path}.range", f"needs min < max, got {list(self.range)}")
+        for key in ("view_lower", "view_upper"):
+            if getattr(self, key) is not None:
+                _check_vector(f"{path}.{key}", getattr(self, key), 2)
+        if (self.view_lower is None) != (self.view_upper is None):
+            raise ConfigError(f"{path}.view_lower", "give both view_lower and view_upper, or neither")
+        if self.view_lower is not None and not all(a < b for a, b in zip(self.view_lower, self.view_upper)):
+            raise ConfigError(f"{path}.view_upper", "must lie above view_lower on every axis")
+        if self.camera is not None:
+            if dim != 3:
+                raise ConfigError(f"{path}.camera", "only 3D scenes have a camera")
+            self.camera.check(f"{path}.camera")
+
+
+@dataclass(frozen=True, kw_only=True)
 class Scene:
     dimension: Literal[2, 3] = _key("2 or 3")
     domain: Domain = _key("bounding box and periodic axes")
@@ -334,9 +387,11 @@ class Scene:
     precision: Literal["f32", "f64"] = _key("floating point precision of all fields", "f64")
     gravity: Gravity = _key("gravitational acceleration", Gravity())
     walls: Tuple[Wall, ...] = _key("walls as boundary particles", ())
+    render: Render = _key("PNG frames", Render())
 
     def check(self) -> None:
         dim = self.dimension
+        self.render.check("render", dim)
         self.domain.check("domain", dim)
         self.gravity.check("gravity")
         self.material.check("material")

@@ -75,6 +75,10 @@ class Simulation:
         self.diagnostics = Diagnostics(self.state, self.scheme.model)
         self.guard = Guard(self.state, scene.domain)
         self.output = RunOutput(out_dir, scene.run.write_vtu) if out_dir is not None else None
+        self.renderer = None
+        if self.output is not None and scene.render.frames:
+            from .render.frames import Renderer
+            self.renderer = Renderer(scene)
         self.show_progress = sys.stderr.isatty() if progress is None else progress
         self.t = 0.0
         self.step_count = 0
@@ -98,8 +102,15 @@ class Simulation:
         diag = self.diagnostics.measure()
         self.last_diagnostics = {"t": self.t, "step": self.step_count, "dt": self.dt, **diag}
         if self.output is not None:
-            self.output.write_frame(self.frame_index, self.t, self.scheme.snapshot(), self.state.n_material)
+            arrays = self.scheme.snapshot()
+            self.output.write_frame(self.frame_index, self.t, arrays, self.state.n_material)
             self.output.write_diagnostics(self.last_diagnostics)
+            if self.renderer is not None:
+                from .render.frames import check_colour_field, png_name, write_png
+                if self.frame_index == 0:  # the first frame comes before the first step
+                    check_colour_field(self.scene.render.colour_by, arrays)
+                image = self.renderer.image(arrays, self.state.n_material, self.t)
+                write_png(self.output.dir / "frames" / png_name(self.frame_index), image)
         self.frame_index += 1
 
     # ---- the loop -----------------------------------------------------------------------------

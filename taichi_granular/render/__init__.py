@@ -1,0 +1,1 @@
+"""Headless rendering of particle frames to PNG (Taichi rasteriser, imageio output)."""

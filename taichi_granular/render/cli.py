@@ -1,0 +1,41 @@
+"""The ``render`` command: re-render a run's saved particle frames with other settings."""
+import dataclasses
+from pathlib import Path
+
+from ..config import load_scene
+from ..output import read_frame, read_series
+
+
+def render_output(args) -> int:
+    from .. import runtime
+    from .frames import Renderer, assemble_video, check_colour_field, png_name, write_png
+
+    out_dir = Path(args.output_dir)
+    resolved = out_dir / "scene.resolved.yaml"
+    if not resolved.exists():
+        raise FileNotFoundError(f"{out_dir} holds no run (missing scene.resolved.yaml)")
+    scene = load_scene(resolved)
+    settings = scene.render
+    changes = {k: v for k, v in (("colour_by", args.colour_by), ("width", args.width),
+                                 ("range", tuple(args.range) if args.range else None)) if v is not None}
+    settings = dataclasses.replace(settings, **changes)
+    scene = dataclasses.replace(scene, render=settings)
+    scene.check()
+    series = read_series(out_dir)
+    if not series:
+        raise FileNotFoundError(f"no frames listed in {out_dir / 'particles.pvd'}")
+    target = Path(args.out) if args.out else out_dir / f"frames_{settings.colour_by}"
+    runtime.init(args.arch, scene.precision)
+    renderer = Renderer(scene)
+    written = []
+    for index, (t, path) in enumerate(series):
+        arrays = read_frame(path)
+        if index == 0:
+            check_colour_field(settings.colour_by, arrays, "--colour-by")
+        n_material = int((arrays["is_wall"] == 0).sum())
+        written.append(target / png_name(index))
+        write_png(written[-1], renderer.image(arrays, n_material, t))
+    print(f"{len(written)} frames -> {target}")
+    if args.video:
+        print(f"video -> {assemble_video(written, Path(args.video), args.fps)}")
+    return 0

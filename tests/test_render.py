@@ -1,0 +1,109 @@
+"""Headless rasteriser (render/): coverage, colours, depth order, walls, the render command."""
+import math
+
+import numpy as np
+import pytest
+
+from scenes import GLASS_BEADS, build, layer
+from taichi_granular import runtime
+from taichi_granular.config import ConfigError
+from taichi_granular.render.colormap import NEUTRAL_GREY, colour_map
+from taichi_granular.render.frames import Renderer, check_colour_field
+
+WHITE = np.array([255, 255, 255])
+
+
+@pytest.fixture(autouse=True)
+def taichi_cpu():
+    runtime.init("cpu", "f64")
+
+
+def scene_2d(**render):
+    data = layer(height=0.05, length=0.1)
+    data["render"] = {"width": 220, "range": [0.0, 1.0], "view_lower": [0.0, 0.0], "view_upper": [0.1, 0.1],
+                      **render}
+    return build(data)
+
+
+def frame(positions, speeds, n_material=None, dp=0.005):
+    n = len(positions)
+    velocity = np.zeros((n, len(positions[0])))
+    velocity[:, 0] = speeds
+    return {"position": np.array(positions, float), "velocity": velocity,
+            "mass": np.full(n, 600.0 * dp ** velocity.shape[1]), "density": np.full(n, 600.0),
+            "pressure": np.linspace(0.0, 1.0, n)}, (n if n_material is None else n_material)
+
+
+def test_a_disc_covers_its_true_area_in_its_colour():
+    scene = scene_2d()
+    renderer = Renderer(scene)
+    arrays, n = frame([[0.05, 0.05]], [0.3])
+    image = renderer.image(arrays, n, 0.0)[:, :renderer.view_width]
+    covered = np.any(image != WHITE, axis=2)
+    covered[:40, :] = False  # the time stamp
+    radius_px = math.sqrt(0.005**2 / math.pi) / renderer.pixel
+    assert covered.sum() == pytest.approx(math.pi * radius_px**2, rel=0.08)
+    row, col = int((0.1 - 0.05) / renderer.pixel), int(0.05 / renderer.pixel)
+    expected = np.round(255 * colour_map(np.array([0.3]), 0.0, 1.0)[0])
+    assert np.abs(image[row, col].astype(int) - expected).max() <= 1
+
+
+def test_walls_are_grey_and_material_is_drawn_over_them():
+    scene = scene_2d()
+    renderer = Renderer(scene)
+    arrays, _ = frame([[0.05, 0.05], [0.0515, 0.05]], [1.0, 0.0])
+    image = renderer.image(arrays, 1, 0.0)
+    row = int((0.1 - 0.05) / renderer.pixel)
+    wall_side = image[row, int(0.0537 / renderer.pixel)]
+    assert np.abs(wall_side.astype(int) - np.round(255 * np.array(NEUTRAL_GREY))).max() <= 1
+    overlap = image[row, int(0.0508 / renderer.pixel)]  # both cover it: the material particle wins
+    assert np.abs(overlap.astype(int) - np.round(255 * colour_map(np.array([1.0]), 0, 1)[0])).max() <= 1
+
+
+def test_unknown_colour_field_names_the_key():
+    arrays, _ = frame([[0.05, 0.05]], [0.3])
+    with pytest.raises(ConfigError, match=r"render.colour_by: no particle field 'presure'; did you mean 'pressure'"):
+        check_colour_field("presure", arrays)
+
+
+def scene_3d():
+    material = dict(GLASS_BEADS)
+    data = {"name": "splat", "dimension": 3, "domain": {"lower": [-1, -1, -1], "upper": [1, 1, 1]},
+            "material": material, "particles": [{"name": "b", "lower": [0, 0, 0], "upper": [0.2, 0.2, 0.2]}],
+            "numerics": {"particle_spacing": 0.1}, "run": {"end_time": 1.0, "output_interval": 1.0},
+            "render": {"width": 400, "height": 300, "range": [0.0, 1.0],
+                       "camera": {"position": [0.0, -3.0, 0.0], "look_at": [0.0, 0.0, 0.0], "up": [0, 0, 1],
+                                  "field_of_view_deg": 30.0}}}
+    return build(data)
+
+
+@pytest.mark.parametrize("near_first", [True, False])
+def test_the_nearer_sphere_hides_the_farther_one(near_first):
+    renderer = Renderer(scene_3d())
+    near, far = [0.0, -0.5, 0.0], [0.0, 0.5, 0.0]
+    positions = [near, far] if near_first else [far, near]
+    speeds = [0.0, 1.0] if near_first else [1.0, 0.0]  # the near sphere is dark blue (speed 0)
+    arrays, n = frame(positions, speeds, dp=0.3)
+    image = renderer.image(arrays, n, 0.0).astype(int)
+    centre = image[150, 200]
+    assert centre[2] > centre[0] and centre[2] > centre[1]  # viridis(0) is blue-violet, viridis(1) yellow
+    # Lambert shading: the lit side of the sphere is brighter than the side away from the light
+    offset = int(0.5 * 0.5 * 300 / math.tan(math.radians(15)) * np.cbrt(3 * 0.3**3 / (4 * math.pi)) / 2.5)
+    lit, unlit = image[150 - offset, 200 - offset], image[150 + offset, 200 + offset]
+    assert lit.sum() > unlit.sum()
+
+
+def test_render_command_rerenders_a_run(tmp_path):
+    from taichi_granular.cli import main
+    from taichi_granular.simulation import Simulation
+
+    data = layer(height=0.02, length=0.04)
+    data["run"] = {"end_time": 0.002, "output_interval": 0.001}
+    out = tmp_path / "run"
+    Simulation(build(data), out_dir=out).run()
+    assert len(list((out / "frames").glob("frame_*.png"))) == 3
+    gif = tmp_path / "p.gif"
+    assert main(["render", str(out), "--colour-by", "pressure", "--width", "200", "--video", str(gif)]) == 0
+    assert len(list((out / "frames_pressure").glob("frame_*.png"))) == 3
+    assert gif.stat().st_size > 0
+    assert main(["render", str(out), "--colour-by", "nonsense"]) == 2
