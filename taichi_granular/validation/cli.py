@@ -35,3 +35,52 @@ def validate_inclined_plane(args) -> int:
     ok = result.velocity_error < 0.05 and result.pressure_error < 0.05
     print(f"  acceptance (both errors < 5 %): {'PASS' if ok else 'FAIL'}; profile -> {out / 'profile.csv'}")
     return 0 if ok else 1
+
+
+def validate_column_collapse(args) -> int:
+    import csv
+    import io
+
+    import numpy as np
+
+    from ..output import atomic_write_text
+    from ..render.frames import write_png
+    from ..render.plot import plot_points_and_curve
+    from . import column_collapse as cc
+
+    paths = sorted(config_path("mu_i").glob("collapse_a*.yaml"))
+    if args.cases:
+        wanted = set(args.cases)
+        paths = [p for p in paths if p.stem in wanted or p.stem.replace("collapse_", "") in wanted]
+        if not paths:
+            raise FileNotFoundError(f"no collapse case among {sorted(args.cases)}; known: "
+                                    f"{', '.join(p.stem for p in sorted(config_path('mu_i').glob('collapse_a*.yaml')))}")
+    base = Path(args.out) if args.out else Path("output/validate/column_collapse")
+    results = []
+    for path in paths:
+        scene = load_scene(path, args.set)
+        out = base / scene.name
+        times, frames = _frames(scene, out, args.reuse, args.quiet)
+        with open(out / "diagnostics.csv") as fh:
+            diagnostics = [{k: float(v) for k, v in row.items()} for row in csv.DictReader(fh)]
+        result = cc.evaluate(scene, times, frames, diagnostics)
+        cc.write_fronts_csv(result, out / "fronts.csv")
+        results.append(result)
+        print(cc.HEADER if len(results) == 1 else "", end="\n" if len(results) == 1 else "")
+        print(result.row(), flush=True)
+    buf = io.StringIO()
+    buf.write("case,aspect_ratio,runout,runout_lube,error,deposit_height,time_to_rest,detached\n")
+    for r in results:
+        buf.write(f"{r.name},{r.aspect_ratio:.4f},{r.runout:.4f},{r.runout_reference:.4f},{r.error:.4f},"
+                  f"{r.deposit_height:.5f},{'' if r.time_to_rest is None else f'{r.time_to_rest:.4f}'},{r.detached}\n")
+    atomic_write_text(base / "runout.csv", buf.getvalue())
+    a = np.linspace(0.01, max(3.2, max(r.aspect_ratio for r in results) * 1.05), 200)
+    image = plot_points_and_curve([(r.aspect_ratio, r.runout) for r in results],
+                                  (a, np.array([cc.lube_runout(x) for x in a])),
+                                  "aspect ratio a", "(r_inf - r0)/r0", "line: lube et al. 2004, squares: sph")
+    write_png(base / "runout.png", image)
+    ok = all((abs(r.error) < 0.15 or r.aspect_ratio > 3.0) and r.time_to_rest is not None and r.detached == 0
+             for r in results)
+    print(f"acceptance (run-out within 15 % of Lube for a <= 3, at rest, nothing loose): "
+          f"{'PASS' if ok else 'FAIL'}; {base / 'runout.csv'}, {base / 'runout.png'}")
+    return 0 if ok else 1
