@@ -43,6 +43,7 @@ def test_coarse_collapse_spreads_towards_the_lube_runout():
     n = sim.state.n_material
     is_wall = np.r_[np.zeros(n, int), np.ones(sim.state.n_wall, int)]
     times, frames, diagnostics = [], [], []
+    sim.run(end_time=0.0)  # initial rates and equation of state, no step
     while True:
         times.append(sim.t)
         frames.append({**sim.scheme.snapshot(), "is_wall": is_wall})
