@@ -103,6 +103,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--colour-by", help="particle field (speed, pressure, inertial_number, ...)")
     p.add_argument("--range", type=float, nargs=2, metavar=("MIN", "MAX"), help="fixed colour range")
     p.add_argument("--width", type=int, help="image width [px]")
+    p.add_argument("--view", type=float, nargs=4, metavar=("X0", "Y0", "X1", "Y1"), help="2D view box [m]")
+    p.add_argument("--times", type=float, nargs="+", help="only the frames at these simulated times [s]")
     p.add_argument("--out", help="frame directory (default OUTPUT_DIR/frames_<field>)")
     p.add_argument("--video", help="also join the frames into this .gif or .mp4")
     p.add_argument("--fps", type=float, default=10.0, help="video frames per second")

@@ -18,6 +18,8 @@ def render_output(args) -> int:
     settings = scene.render
     changes = {k: v for k, v in (("colour_by", args.colour_by), ("width", args.width),
                                  ("range", tuple(args.range) if args.range else None)) if v is not None}
+    if args.view:
+        changes["view_lower"], changes["view_upper"] = tuple(args.view[:2]), tuple(args.view[2:])
     settings = dataclasses.replace(settings, **changes)
     scene = dataclasses.replace(scene, render=settings)
     scene.check()
@@ -29,8 +31,10 @@ def render_output(args) -> int:
     renderer = Renderer(scene)
     written = []
     for index, (t, path) in enumerate(series):
+        if args.times and not any(abs(t - wanted) < 1e-6 for wanted in args.times):
+            continue
         arrays = read_frame(path)
-        if index == 0:
+        if not written:
             check_colour_field(settings.colour_by, arrays, "--colour-by")
         n_material = int((arrays["is_wall"] == 0).sum())
         written.append(target / png_name(index))
