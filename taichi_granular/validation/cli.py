@@ -69,18 +69,18 @@ def validate_column_collapse(args) -> int:
         print(cc.HEADER if len(results) == 1 else "", end="\n" if len(results) == 1 else "")
         print(result.row(), flush=True)
     buf = io.StringIO()
-    buf.write("case,aspect_ratio,runout,runout_lube,error,deposit_height,time_to_rest,detached\n")
+    buf.write("case,aspect_ratio,runout,runout_lube,error,deposit_height,time_to_rest,escaped\n")
     for r in results:
         buf.write(f"{r.name},{r.aspect_ratio:.4f},{r.runout:.4f},{r.runout_reference:.4f},{r.error:.4f},"
-                  f"{r.deposit_height:.5f},{'' if r.time_to_rest is None else f'{r.time_to_rest:.4f}'},{r.detached}\n")
+                  f"{r.deposit_height:.5f},{'' if r.time_to_rest is None else f'{r.time_to_rest:.4f}'},{r.escaped}\n")
     atomic_write_text(base / "runout.csv", buf.getvalue())
     a = np.linspace(0.01, max(3.2, max(r.aspect_ratio for r in results) * 1.05), 200)
     image = plot_points_and_curve([(r.aspect_ratio, r.runout) for r in results],
                                   (a, np.array([cc.lube_runout(x) for x in a])),
                                   "aspect ratio a", "(r_inf - r0)/r0", "line: lube et al. 2004, squares: sph")
     write_png(base / "runout.png", image)
-    ok = all((abs(r.error) < 0.15 or r.aspect_ratio > 3.0) and r.time_to_rest is not None and r.detached == 0
+    ok = all((abs(r.error) < 0.15 or r.aspect_ratio > 3.0) and r.time_to_rest is not None and r.escaped == 0
              for r in results)
-    print(f"acceptance (run-out within 15 % of Lube for a <= 3, at rest, nothing loose): "
+    print(f"acceptance (run-out within 15 % of Lube for a <= 3, at rest, none escaped): "
           f"{'PASS' if ok else 'FAIL'}; {base / 'runout.csv'}, {base / 'runout.png'}")
     return 0 if ok else 1
