@@ -313,10 +313,15 @@ class Run:
     output_dir: Optional[str] = _key("where outputs go (default output/<scene name>)", None)
     write_vtu: bool = _key("write a VTU particle file per frame (a .pvd series)", True)
     max_steps: Optional[int] = _key("stop after this many steps (default: no limit)", None)
+    stop_at_rest: Optional[float] = _key(
+        "stop once the kinetic energy, checked at each output, has fallen below this fraction of its peak "
+        "(e.g. 1e-3 for a collapse at rest; default: run to end_time)", None, "-")
 
     def check(self, path: str) -> None:
         _positive(f"{path}.end_time", self.end_time)
         _positive(f"{path}.output_interval", self.output_interval)
+        if self.stop_at_rest is not None and not 0.0 < self.stop_at_rest < 1.0:
+            raise ConfigError(f"{path}.stop_at_rest", f"must lie in (0, 1), got {self.stop_at_rest}")
         if self.max_steps is not None and self.max_steps < 1:
             raise ConfigError(f"{path}.max_steps", "must be >= 1")
 

@@ -85,6 +85,7 @@ class Simulation:
         self.dt = 0.0
         self.frame_index = 0
         self.last_diagnostics: dict = {}
+        self.peak_kinetic_energy = 0.0
 
     # ---- pieces -------------------------------------------------------------------------------
 
@@ -100,6 +101,7 @@ class Simulation:
 
     def write_frame(self) -> None:
         diag = self.diagnostics.measure()
+        self.peak_kinetic_energy = max(self.peak_kinetic_energy, diag["kinetic_energy"])
         self.last_diagnostics = {"t": self.t, "step": self.step_count, "dt": self.dt, **diag}
         if self.output is not None:
             arrays = self.scheme.snapshot()
@@ -112,6 +114,12 @@ class Simulation:
                 image = self.renderer.image(arrays, self.state.n_material, self.t)
                 write_png(self.output.dir / "frames" / png_name(self.frame_index), image)
         self.frame_index += 1
+
+    def at_rest(self) -> bool:
+        """run.stop_at_rest: kinetic energy below that fraction of its peak so far."""
+        fraction = self.scene.run.stop_at_rest
+        return fraction is not None and self.peak_kinetic_energy > 0.0 and \
+            self.last_diagnostics["kinetic_energy"] < fraction * self.peak_kinetic_energy
 
     # ---- the loop -----------------------------------------------------------------------------
 
@@ -147,6 +155,8 @@ class Simulation:
             if self.t >= next_output - 1e-9 * interval:
                 self.write_frame()
                 next_output += interval
+                if self.at_rest():
+                    break
             progress.update(self.t, self.step_count - start_steps)
         progress.update(self.t, self.step_count - start_steps, force=True)
         progress.close()

@@ -57,3 +57,18 @@ def test_coarse_collapse_spreads_towards_the_lube_runout():
     assert abs(result.error) < 0.35, result.row()
     assert result.fronts[-1].height < 0.9 * result.fronts[0].height  # it did collapse (measured 0.84)
     assert max(d["kinetic_energy"] for d in diagnostics) > 100 * diagnostics[-1]["kinetic_energy"]
+
+
+def test_run_stops_once_at_rest():
+    """run.stop_at_rest: a layer laid without its weight's compression settles (the kinetic
+    energy peaks, then decays) and the run stops at the first output below the fraction."""
+    from scenes import build, layer
+
+    data = layer(height=0.02, length=0.04, end_time=1.0)
+    data["particles"][0]["initial_stress"] = "zero"
+    data["run"].update(output_interval=0.005, stop_at_rest=0.05)
+    sim = Simulation(build(data))
+    summary = sim.run()
+    assert summary.time < 0.5
+    assert sim.last_diagnostics["kinetic_energy"] < 0.05 * sim.peak_kinetic_energy
+    assert sim.peak_kinetic_energy > 0.0
