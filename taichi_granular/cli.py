@@ -28,6 +28,23 @@ def cmd_run(args) -> int:
     return 0
 
 
+def cmd_resume(args) -> int:
+    from .simulation import Simulation
+
+    out = Path(args.output_dir)
+    resolved = out / "scene.resolved.yaml"
+    if not resolved.exists():
+        raise FileNotFoundError(f"{out} holds no run (missing scene.resolved.yaml)")
+    scene = load_scene(resolved, args.set)
+    sim = Simulation(scene, out_dir=out, progress=not args.quiet)
+    sim.resume()
+    print(f"{scene.name}: resumed at t = {sim.t:.6g} s, step {sim.step_count}; output -> {out}")
+    summary = sim.run(end_time=args.end_time)
+    print(f"done: t = {summary.time:.4g} s in {summary.steps} more steps, {summary.wall_seconds:.1f} s wall, "
+          f"{summary.particle_steps_per_second:.3g} particle-steps/s, {summary.frames} frames")
+    return 0
+
+
 def cmd_render(args) -> int:
     from .render.cli import render_output
     return render_output(args)
@@ -94,6 +111,14 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=cmd_run)
 
+    p = sub.add_parser("resume", help="continue a run from the checkpoint in its output directory")
+    p.add_argument("output_dir", help="the run's output directory (holds checkpoint.npz)")
+    p.add_argument("--end-time", type=float, help="run to this time instead of run.end_time [s]")
+    p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                   help="override a key of the saved scene (run.end_time, run.output_interval, render.*)")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.set_defaults(func=cmd_resume)
+
     p = sub.add_parser("describe", help="stage list, fields and memory, time step; runs nothing")
     scene_args(p)
     p.set_defaults(func=cmd_describe)
@@ -144,6 +169,12 @@ def main(argv=None) -> int:
         print(f"error in scene: {err}", file=sys.stderr)
         return 2
     except FileNotFoundError as err:
+        print(f"error: {err}", file=sys.stderr)
+        return 2
+    except RuntimeError as err:
+        from .simulation import ResumeError
+        if not isinstance(err, ResumeError):
+            raise
         print(f"error: {err}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:

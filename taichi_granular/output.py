@@ -4,6 +4,8 @@
 ``<out>/particles_NNNNNN.vtu``  one VTU point cloud per frame (meshio)
 ``<out>/particles.pvd``         the series ParaView opens, with simulated times
 ``<out>/diagnostics.csv``       t, step, dt, kinetic energy, max speed, max density error per frame
+``<out>/checkpoint.npz``        every particle field and the run's counters at the last frame
+                                (``taichi-granular resume <out>`` continues from it)
 """
 from __future__ import annotations
 
@@ -82,6 +84,9 @@ def particle_mesh(arrays: Dict[str, np.ndarray], n_material: int) -> meshio.Mesh
     return meshio.Mesh(points, cells, point_data=data)
 
 
+CHECKPOINT = "checkpoint.npz"
+
+
 class RunOutput:
     """The output directory of one run."""
 
@@ -91,6 +96,22 @@ class RunOutput:
         self.write_vtu = write_vtu
         self.frames: List[tuple] = []  # (time, file name)
         self.diagnostics: List[dict] = []
+
+    def reopen(self, time: float) -> None:
+        """Continue a run from its checkpoint at ``time``: keep the frames and diagnostics rows
+        up to it (anything later was written after the checkpoint and is dropped)."""
+        if (self.dir / "particles.pvd").exists():
+            self.frames = [(t, p.name) for t, p in read_series(self.dir) if t <= time * (1 + 1e-12)]
+        if (self.dir / "diagnostics.csv").exists():
+            with open(self.dir / "diagnostics.csv") as fh:
+                rows = [{k: (int(v) if k == "step" else float(v)) for k, v in r.items()} for r in csv.DictReader(fh)]
+            self.diagnostics = [r for r in rows if r["t"] <= time * (1 + 1e-12)]
+
+    def write_checkpoint(self, arrays: Dict[str, np.ndarray], counters: Dict[str, float]) -> None:
+        data = {f"field/{k}": v for k, v in arrays.items()}
+        data.update({f"counter/{k}": np.array(v) for k, v in counters.items()})
+        atomic_write(self.dir / CHECKPOINT, lambda tmp: np.savez(open(tmp, "wb"), **data))
+
 
     def write_scene(self, scene: Scene) -> None:
         atomic_write_text(self.dir / "scene.resolved.yaml", dump_scene(scene))
@@ -140,3 +161,14 @@ def read_frame(path: Path) -> Dict[str, np.ndarray]:
     pts = np.asarray(mesh.points)
     arrays["position"] = pts[:, :2] if np.all(pts[:, 2] == 0) else pts
     return arrays
+
+
+def read_checkpoint(out_dir: Path):
+    """(fields, counters) of ``<out_dir>/checkpoint.npz``."""
+    path = Path(out_dir) / CHECKPOINT
+    if not path.exists():
+        raise FileNotFoundError(f"no checkpoint in {out_dir} (missing {CHECKPOINT})")
+    with np.load(path) as data:
+        fields = {k.split("/", 1)[1]: data[k] for k in data.files if k.startswith("field/")}
+        counters = {k.split("/", 1)[1]: data[k].item() for k in data.files if k.startswith("counter/")}
+    return fields, counters

@@ -19,6 +19,10 @@ class SimulationError(RuntimeError):
     """A run stopped by a guard: names the step, time, particle and offending values."""
 
 
+class ResumeError(RuntimeError):
+    """A checkpoint that does not fit the scene it is resumed with."""
+
+
 @dataclass
 class RunSummary:
     steps: int
@@ -107,6 +111,7 @@ class Simulation:
             arrays = self.scheme.snapshot()
             self.output.write_frame(self.frame_index, self.t, arrays, self.state.n_material)
             self.output.write_diagnostics(self.last_diagnostics)
+            self.output.write_checkpoint(self.state.to_numpy(), self.counters())
             if self.renderer is not None:
                 from .render.frames import check_colour_field, png_name, write_png
                 if self.frame_index == 0:  # the first frame comes before the first step
@@ -114,6 +119,28 @@ class Simulation:
                 image = self.renderer.image(arrays, self.state.n_material, self.t)
                 write_png(self.output.dir / "frames" / png_name(self.frame_index), image)
         self.frame_index += 1
+
+    def counters(self) -> dict:
+        return {"t": self.t, "step": self.step_count, "dt": self.dt, "frame": self.frame_index,
+                "peak_kinetic_energy": self.peak_kinetic_energy}
+
+    def resume(self) -> None:
+        """Continue from the checkpoint in the output directory: every particle field (the
+        integrator's start-of-step and rate fields included) and the counters, so that the
+        continued run takes the same steps as one that never stopped."""
+        from .output import read_checkpoint
+
+        fields, counters = read_checkpoint(self.output.dir)
+        missing = set(self.state.specs) - set(fields)
+        if missing or any(fields[k].shape[0] != self.state.field(k).shape[0] for k in self.state.specs):
+            raise ResumeError(f"the checkpoint in {self.output.dir} does not fit this scene "
+                             f"(fields or particle counts differ{': missing ' + ', '.join(sorted(missing)) if missing else ''})")
+        self.state.load(fields)
+        self.t, self.step_count, self.dt = float(counters["t"]), int(counters["step"]), float(counters["dt"])
+        self.frame_index = int(counters["frame"]) + 1  # the checkpoint was taken at that frame
+        self.peak_kinetic_energy = float(counters["peak_kinetic_energy"])
+        self.output.reopen(self.t)
+        self.scheme.after_move()  # neighbour grid of the loaded positions
 
     def at_rest(self) -> bool:
         """run.stop_at_rest: kinetic energy below that fraction of its peak so far."""
