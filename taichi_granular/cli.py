@@ -29,13 +29,11 @@ def cmd_run(args) -> int:
 
 
 def cmd_resume(args) -> int:
+    from .output import load_run_scene
     from .simulation import Simulation
 
     out = Path(args.output_dir)
-    resolved = out / "scene.resolved.yaml"
-    if not resolved.exists():
-        raise FileNotFoundError(f"{out} holds no run (missing scene.resolved.yaml)")
-    scene = load_scene(resolved, args.set)
+    scene = load_run_scene(out, args.set)
     sim = Simulation(scene, out_dir=out, progress=not args.quiet)
     sim.resume()
     print(f"{scene.name}: resumed at t = {sim.t:.6g} s, step {sim.step_count}; output -> {out}")

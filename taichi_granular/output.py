@@ -172,3 +172,13 @@ def read_checkpoint(out_dir: Path):
         fields = {k.split("/", 1)[1]: data[k] for k in data.files if k.startswith("field/")}
         counters = {k.split("/", 1)[1]: data[k].item() for k in data.files if k.startswith("counter/")}
     return fields, counters
+
+
+def load_run_scene(out_dir: Path, overrides=()) -> Scene:
+    """The scene a run in ``out_dir`` was made with (its scene.resolved.yaml)."""
+    from .config import load_scene
+
+    resolved = Path(out_dir) / "scene.resolved.yaml"
+    if not resolved.exists():
+        raise FileNotFoundError(f"{out_dir} holds no run (missing scene.resolved.yaml)")
+    return load_scene(resolved, overrides)

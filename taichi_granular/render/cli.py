@@ -2,8 +2,7 @@
 import dataclasses
 from pathlib import Path
 
-from ..config import load_scene
-from ..output import read_frame, read_series
+from ..output import load_run_scene, read_frame, read_series
 
 
 def render_output(args) -> int:
@@ -11,10 +10,7 @@ def render_output(args) -> int:
     from .frames import Renderer, assemble_video, check_colour_field, png_name, write_png
 
     out_dir = Path(args.output_dir)
-    resolved = out_dir / "scene.resolved.yaml"
-    if not resolved.exists():
-        raise FileNotFoundError(f"{out_dir} holds no run (missing scene.resolved.yaml)")
-    scene = load_scene(resolved)
+    scene = load_run_scene(out_dir)
     settings = scene.render
     changes = {k: v for k, v in (("colour_by", args.colour_by), ("width", args.width),
                                  ("range", tuple(args.range) if args.range else None)) if v is not None}
