@@ -53,6 +53,13 @@ def test_bundled_scene_loads_and_round_trips():
     (lambda d: d["run"].update(end_time=-1.0), "run.end_time", "> 0"),
     (lambda d: d["gravity"].update(tilt_deg=95.0), "gravity.tilt_deg", "(-90, 90)"),
     (lambda d: d.update(arch="tpu"), "arch", "not one of"),
+    (lambda d: d["run"].update(stop_at_rest=2.0), "run.stop_at_rest", "(0, 1)"),
+    (lambda d: d.update(render={"colour_bi": "speed"}), "render.colour_bi", "did you mean 'colour_by'"),
+    (lambda d: d.update(render={"range": [5.0, 1.0]}), "render.range", "min < max"),
+    (lambda d: d.update(render={"width": 10}), "render.width", "[32, 8192]"),
+    (lambda d: d.update(render={"view_lower": [0.0, 0.0]}), "render.view_lower", "both"),
+    (lambda d: d.update(render={"camera": {"position": [0, 0, 1], "look_at": [0, 0, 0]}}), "render.camera",
+     "only 3D"),
 ])
 def test_bad_values_name_their_key(edit, path, words):
     err = error_of(edit)
