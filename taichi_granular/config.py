@@ -247,13 +247,15 @@ class ArtificialViscosity:
 class ParticleShifting:
     """Particle shifting (after Lind et al. 2012): each step a particle moves by
     dr_i = -coefficient h c_i dt grad C_i down its concentration gradient, its velocity is
-    carried along by a Taylor correction, and free-surface particles do not shift.
+    carried along by a Taylor correction; on and next to a free surface only the component
+    along the surface is kept.
     coefficient = 0 removes the stage altogether."""
 
     coefficient: float = _key("zeta in dr = -zeta h c dt grad C (0 = off; 0.2 keeps sheared layers ordered)",
                               0.2, "-")
     free_surface_threshold: float = _key(
-        "particles whose kernel sum (Shepard) falls below this are free surface and do not shift", 0.9, "-")
+        "particles whose kernel sum (Shepard) falls below this are on the free surface (shift along it only)",
+        0.9, "-")
 
     def check(self, path: str) -> None:
         if not (0.0 <= self.coefficient <= 1.0):

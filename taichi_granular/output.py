@@ -110,7 +110,10 @@ class RunOutput:
     def write_checkpoint(self, arrays: Dict[str, np.ndarray], counters: Dict[str, float]) -> None:
         data = {f"field/{k}": v for k, v in arrays.items()}
         data.update({f"counter/{k}": np.array(v) for k, v in counters.items()})
-        atomic_write(self.dir / CHECKPOINT, lambda tmp: np.savez(open(tmp, "wb"), **data))
+        def write(tmp):
+            with open(tmp, "wb") as fh:  # a file object: np.savez would append .npz to a bare name
+                np.savez(fh, **data)
+        atomic_write(self.dir / CHECKPOINT, write)
 
 
     def write_scene(self, scene: Scene) -> None:

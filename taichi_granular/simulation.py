@@ -111,7 +111,7 @@ class Simulation:
             arrays = self.scheme.snapshot()
             self.output.write_frame(self.frame_index, self.t, arrays, self.state.n_material)
             self.output.write_diagnostics(self.last_diagnostics)
-            self.output.write_checkpoint(self.state.to_numpy(), self.counters())
+            self.output.write_checkpoint({k: arrays[k] for k in self.state.specs}, self.counters())
             if self.renderer is not None:
                 from .render.frames import check_colour_field, png_name, write_png
                 if self.frame_index == 0:  # the first frame comes before the first step

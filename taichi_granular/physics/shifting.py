@@ -73,7 +73,8 @@ class ParticleShifting(Stage):
             acc[2, a] += volume * grad[a]
 
     @ti.kernel
-    def shift(self):
+    def _run(self):
+        """Kernel sums come from the FreeSurface stage, earlier in the step."""
         s = self.state
         ti.loop_config(serialize=runtime.serial_loops)
         for i in range(s.n_material):
@@ -96,9 +97,6 @@ class ParticleShifting(Stage):
                 n = normal.normalized()
                 shift -= shift.dot(n) * n
             s.shift_velocity[i] = shift
-
-    def run(self) -> None:
-        self.shift()  # kernel sums come from the FreeSurface stage, earlier in the step
 
 
 @ti.data_oriented

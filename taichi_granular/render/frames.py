@@ -8,11 +8,11 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
-from typing import Dict, Optional, Sequence, Tuple
+from typing import Dict, Sequence, Tuple
 
 import numpy as np
 
-from ..config import Render, Scene
+from ..config import Scene
 from .colormap import BACKGROUND, NEUTRAL_GREY, colour_map
 from .font import GLYPH_HEIGHT, draw_text, text_width
 
@@ -58,9 +58,9 @@ def png_name(index: int) -> str:
 class Renderer:
     """Renders frames of one scene with its ``render`` settings (any backend, headless)."""
 
-    def __init__(self, scene: Scene, settings: Optional[Render] = None):
+    def __init__(self, scene: Scene):
         self.scene = scene
-        self.settings = settings or scene.render
+        self.settings = scene.render
         self.dim = scene.dimension
         s = self.settings
         self.width = s.width

@@ -88,24 +88,20 @@ class Rasteriser:
         return r0, r1, c0, c1
 
     @ti.kernel
-    def nearest_depth(self, n: ti.i32):
+    def cover(self, n: ti.i32, owner_pass: ti.template()):
+        """Every pixel of every particle's disc: first pass keeps the nearest depth, second
+        pass (owner_pass) gives the pixel to the lowest index at that depth."""
         for p in range(n):
             if self.screen[p][2] > 0.0:
                 r0, r1, c0, c1 = self.pixel_box(p)
                 for r, c in ti.ndrange((r0, r1), (c0, c1)):
                     inside, dx, dy, depth = self.footprint(p, r, c)
                     if inside:
-                        ti.atomic_min(self.depth[r, c], depth)
-
-    @ti.kernel
-    def nearest_owner(self, n: ti.i32):
-        for p in range(n):
-            if self.screen[p][2] > 0.0:
-                r0, r1, c0, c1 = self.pixel_box(p)
-                for r, c in ti.ndrange((r0, r1), (c0, c1)):
-                    inside, dx, dy, depth = self.footprint(p, r, c)
-                    if inside and depth <= self.depth[r, c]:
-                        ti.atomic_min(self.owner[r, c], p)
+                        if ti.static(owner_pass):
+                            if depth <= self.depth[r, c]:
+                                ti.atomic_min(self.owner[r, c], p)
+                        else:
+                            ti.atomic_min(self.depth[r, c], depth)
 
     @ti.kernel
     def shade(self, lit: ti.i32):
@@ -122,7 +118,7 @@ class Rasteriser:
 
     def draw(self, n: int, lit: bool) -> np.ndarray:
         """Depth, owner and shading passes over the projected particles; returns (H, W, 3) floats."""
-        self.nearest_depth(n)
-        self.nearest_owner(n)
+        self.cover(n, False)
+        self.cover(n, True)
         self.shade(int(lit))
         return self.image.to_numpy()

@@ -57,6 +57,7 @@ def validate_column_collapse(args) -> int:
                                     f"{', '.join(p.stem for p in sorted(config_path('mu_i').glob('collapse_a*.yaml')))}")
     base = Path(args.out) if args.out else Path("output/validate/column_collapse")
     results = []
+    print(cc.HEADER)
     for path in paths:
         scene = load_scene(path, args.set)
         out = base / scene.name
@@ -66,7 +67,6 @@ def validate_column_collapse(args) -> int:
         result = cc.evaluate(scene, times, frames, diagnostics)
         cc.write_fronts_csv(result, out / "fronts.csv")
         results.append(result)
-        print(cc.HEADER if len(results) == 1 else "", end="\n" if len(results) == 1 else "")
         print(result.row(), flush=True)
     buf = io.StringIO()
     buf.write("case,aspect_ratio,runout,runout_lube,error,deposit_height,time_to_rest,escaped\n")
