@@ -9,6 +9,14 @@ distance from the column axis, the deposit height (the highest particle top), an
 particles that have escaped (no other particle within the kernel support 2h).
 r0 and H0 are measured the same way on the first frame (the column as laid on the particle
 lattice), and a = H0/r0. The column is at rest when the kinetic energy has fallen below 1e-3 of its peak.
+
+When the run-out is read: the regularised viscosity [M48] is finite below yield (about m_0 tau_y),
+so a deposit whose surface slopes creeps at a strain rate of about (tau/tau_y)/m_0 that does not
+decay. The front stops abruptly (its speed drops by two orders of magnitude within two frames)
+and then creeps at about 1 % of its peak speed for as long as the run goes on. r_inf is read
+where an experimentalist reads it, when the front stops: the first frame after the front's peak
+speed at which its speed has fallen below FRONT_STOP_FRACTION of that peak. The creep speed
+afterwards and the kinetic energy left at the end are reported beside it.
 """
 from __future__ import annotations
 
@@ -23,6 +31,7 @@ import numpy as np
 from ..config import Scene
 
 REST_FRACTION = 1e-3  # at rest: kinetic energy below this share of its peak
+FRONT_STOP_FRACTION = 0.05  # the front has stopped: its speed below this share of its peak speed
 
 
 def lube_runout(aspect_ratio: float) -> float:
@@ -79,10 +88,14 @@ class CollapseResult:
     name: str
     aspect_ratio: float
     r0: float
-    runout: float  # (r_inf - r0)/r0, simulated
+    runout: float  # (r_inf - r0)/r0 when the front stopped (at the end if it never did)
     runout_reference: float  # Lube et al. (2004)
-    deposit_height: float  # [m]
-    time_to_rest: Optional[float]  # [s], None if never at rest
+    deposit_height: float  # [m], when the front stopped
+    front_stop_time: Optional[float]  # [s], None if the front never stopped
+    creep_speed: float  # [m/s] mean front speed from the stop to the end (0 if no frames after it)
+    runout_end: float  # (r_inf - r0)/r0 at the last frame
+    time_to_rest: Optional[float]  # [s], kinetic energy below REST_FRACTION of its peak; None if never
+    final_energy_fraction: float  # kinetic energy at the end over its peak
     escaped: int  # at the end: particles that interact with no other
     end_time: float
     fronts: List[FrameMeasure] = field(default_factory=list)
@@ -92,13 +105,30 @@ class CollapseResult:
         return (self.runout - self.runout_reference) / self.runout_reference
 
     def row(self) -> str:
-        rest = f"{self.time_to_rest:6.3f}" if self.time_to_rest is not None else "  none"
+        def opt(t):
+            return f"{t:6.3f}" if t is not None else "  none"
         return (f"{self.name:<16} {self.aspect_ratio:5.2f} {self.runout:8.3f} {self.runout_reference:8.3f} "
-                f"{100 * self.error:+7.1f} % {1e3 * self.deposit_height:8.1f} {rest} {self.escaped:7d}")
+                f"{100 * self.error:+7.1f} % {1e3 * self.deposit_height:8.1f} {opt(self.front_stop_time)} "
+                f"{1e3 * self.creep_speed:8.2f} {self.runout_end:7.3f} {self.end_time:6.2f} "
+                f"{opt(self.time_to_rest)} {self.final_energy_fraction:9.1e} {self.escaped:7d}")
 
 
-HEADER = (f"{'case':<16} {'a':>5} {'run-out':>8} {'Lube':>8} {'error':>9} {'H_inf mm':>8} {'rest s':>6} "
-          f"{'escaped':>7}")
+HEADER = (f"{'case':<16} {'a':>5} {'run-out':>8} {'Lube':>8} {'error':>9} {'H_inf mm':>8} {'stop s':>6} "
+          f"{'creep mm/s':>8} {'at end':>7} {'end s':>6} {'rest s':>6} {'KE_end/pk':>9} {'escaped':>7}")
+
+
+def front_stop(times: Sequence[float], front: Sequence[float]) -> Optional[int]:
+    """Index of the first frame after the front's peak speed at which its speed (difference to
+    the previous frame) is below FRONT_STOP_FRACTION of that peak; None if it never is."""
+    t, x = np.asarray(times, float), np.asarray(front, float)
+    if len(t) < 3:
+        return None
+    speed = np.diff(x) / np.diff(t)  # speed[k]: between frames k and k + 1
+    peak = int(np.argmax(speed))
+    if speed[peak] <= 0.0:
+        return None
+    slow = np.nonzero(speed[peak:] < FRONT_STOP_FRACTION * speed[peak])[0]
+    return int(peak + slow[0]) if len(slow) else None
 
 
 def time_to_rest(times: Sequence[float], kinetic_energy: Sequence[float]) -> Optional[float]:
@@ -118,14 +148,22 @@ def evaluate(scene: Scene, times: Sequence[float], frames: Sequence[Dict[str, np
     n_material = int(np.sum(frames[0]["is_wall"] == 0))
     support = 2.0 * scene.numerics.smoothing_length
     fronts = [measure_frame(f, n_material, centre, spacing, t, support) for t, f in zip(times, frames)]
+    mean = [0.5 * (m.front_right + m.front_left) for m in fronts]
     first, final = fronts[0], fronts[-1]
-    r0, height = 0.5 * (first.front_right + first.front_left), first.height  # as laid on the lattice
-    r_inf = 0.5 * (final.front_right + final.front_left)
-    rest = time_to_rest([d["t"] for d in diagnostics], [d["kinetic_energy"] for d in diagnostics])
+    r0, height = mean[0], first.height  # as laid on the lattice
+    stop = front_stop(times, mean)
+    read = stop if stop is not None else len(fronts) - 1
+    t_end = float(times[-1])
+    creep = (mean[-1] - mean[read]) / (t_end - times[read]) if t_end > times[read] else 0.0
+    ke = [d["kinetic_energy"] for d in diagnostics]
+    rest = time_to_rest([d["t"] for d in diagnostics], ke)
     a = height / r0
-    return CollapseResult(name=scene.name, aspect_ratio=a, r0=r0, runout=(r_inf - r0) / r0,
-                          runout_reference=lube_runout(a), deposit_height=final.height, time_to_rest=rest,
-                          escaped=final.escaped, end_time=float(times[-1]), fronts=fronts)
+    return CollapseResult(name=scene.name, aspect_ratio=a, r0=r0, runout=(mean[read] - r0) / r0,
+                          runout_reference=lube_runout(a), deposit_height=fronts[read].height,
+                          front_stop_time=None if stop is None else float(times[stop]), creep_speed=creep,
+                          runout_end=(mean[-1] - r0) / r0, time_to_rest=rest,
+                          final_energy_fraction=ke[-1] / max(ke) if max(ke) > 0 else 0.0,
+                          escaped=final.escaped, end_time=t_end, fronts=fronts)
 
 
 def write_fronts_csv(result: CollapseResult, path: Path) -> None:
