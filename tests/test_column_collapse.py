@@ -44,9 +44,10 @@ def test_front_stop_is_read_when_the_front_slows_to_a_creep():
 
 def test_coarse_collapse_spreads_towards_the_lube_runout():
     """Case a = 0.90 of Table 3 at dp = 9 mm (200 particles instead of 1 856), 0.5 s: the column
-    collapses without NaN or escaping particles and its front stops within 35 % of the Lube
-    run-out (measured: stops at 0.35 s, -31.3 %; the same with half the time step. Afterwards the
-    regularised viscosity lets the deposit creep at ~(tau/tau_y)/m_0, 17 mm/s here; see README)."""
+    collapses without NaN or escaping particles and its front stops within 30 % of the Lube
+    run-out (measured: stops at 0.35 s, -24.0 %; -31.3 % with density diffusion delta = 0.02.
+    Afterwards the regularised viscosity lets the deposit creep at ~(tau/tau_y)/m_0, 3.5 mm/s
+    here; see README)."""
     scene = load_scene(config_path("mu_i/collapse_a0_90.yaml"),
                        ["numerics.particle_spacing=0.009", "run.end_time=0.5", "run.output_interval=0.05"])
     sim = Simulation(scene)
@@ -65,7 +66,7 @@ def test_coarse_collapse_spreads_towards_the_lube_runout():
     assert 150 <= n <= 400
     assert result.escaped == 0
     assert result.front_stop_time is not None and result.front_stop_time < 0.5, result.row()
-    assert abs(result.error) < 0.35, result.row()
+    assert abs(result.error) < 0.30, result.row()
     assert result.fronts[-1].height < 0.9 * result.fronts[0].height  # it did collapse (measured 0.84)
     assert max(d["kinetic_energy"] for d in diagnostics) > 100 * diagnostics[-1]["kinetic_energy"]
 
