@@ -79,7 +79,7 @@ def cmd_validate(args) -> int:
     if args.case == "inclined-plane":
         from .validation.cli import validate_inclined_plane
         return validate_inclined_plane(args)
-    if args.case == "column-collapse":
+    if args.case in ("column-collapse", "column-collapse-3d"):
         from .validation.cli import validate_column_collapse
         return validate_column_collapse(args)
     raise AssertionError(args.case)
@@ -135,7 +135,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=cmd_render)
 
     p = sub.add_parser("validate", help="run a validation case and print its errors")
-    p.add_argument("case", choices=["inclined-plane", "column-collapse"])
+    p.add_argument("case", choices=["inclined-plane", "column-collapse", "column-collapse-3d"])
+    p.add_argument("--resolution", choices=["coarse", "paper"], default="coarse",
+                   help="column-collapse-3d: the coarse CPU scenes or the paper's resolution (GPU)")
     p.add_argument("--cases", nargs="+", help="column collapse: only these (e.g. a0_90 a2_75)")
     p.add_argument("--config", help="scene file (default: the bundled one)")
     p.add_argument("--out", help="output directory (default: output/validate/<case>)")

@@ -161,7 +161,52 @@ class MuIMaterial:
         return self.solid_fraction_max * self.grain_density
 
 
-MATERIALS = {"mu_i": MuIMaterial}
+@dataclass(frozen=True, kw_only=True)
+class ElastoplasticMaterial:
+    """Elastic-perfectly-plastic Mohr-Coulomb, Abdelrazek et al. (2016) after Bui et al.
+    (2008), MODEL.md section 3."""
+
+    model: Literal["elastoplastic"] = _key("constitutive model")
+    density: float = _key("rho_0, bulk density of the unstressed material [A5]", unit="kg/m^3")
+    youngs_modulus: float = _key("E, Young's modulus [A6]", unit="Pa")
+    poisson_ratio: float = _key("nu, Poisson's ratio [A6]", unit="-")
+    friction_angle_deg: float = _key("phi, internal friction angle of the Mohr-Coulomb strength", unit="deg")
+    cohesion: float = _key("c of S_f = c + p tan(phi) (0 for dry sand)", 0.0, "Pa")
+    bulk_modulus: Optional[float] = _key(
+        "K of p = K (rho/rho_0 - 1) [A5]; default 50 rho_0 g H_max, H_max the tallest block", None, "Pa")
+
+    def check(self, path: str) -> None:
+        _positive(f"{path}.density", self.density)
+        if not 100.0 <= self.density <= 25000.0:
+            raise ConfigError(f"{path}.density", f"{self.density} is not a plausible bulk density in kg/m^3")
+        _positive(f"{path}.youngs_modulus", self.youngs_modulus)
+        if self.youngs_modulus < 1e3:
+            raise ConfigError(f"{path}.youngs_modulus", f"{self.youngs_modulus} Pa is implausibly soft; give E in Pa")
+        if not 0.0 <= self.poisson_ratio < 0.5:
+            raise ConfigError(f"{path}.poisson_ratio", f"must lie in [0, 0.5), got {self.poisson_ratio}")
+        if not 0.0 <= self.friction_angle_deg < 90.0:
+            raise ConfigError(f"{path}.friction_angle_deg",
+                              f"friction angle {self.friction_angle_deg} must lie in [0, 90) degrees (not radians)")
+        if not (self.cohesion >= 0.0 and math.isfinite(self.cohesion)):
+            raise ConfigError(f"{path}.cohesion", f"must be >= 0, got {self.cohesion}")
+        if self.bulk_modulus is not None:
+            _positive(f"{path}.bulk_modulus", self.bulk_modulus)
+
+    @property
+    def shear_modulus(self) -> float:
+        """G = E/(2(1 + nu))  [Pa]."""
+        return self.youngs_modulus / (2.0 * (1.0 + self.poisson_ratio))
+
+    @property
+    def friction_coefficient(self) -> float:
+        return math.tan(math.radians(self.friction_angle_deg))
+
+    @property
+    def reference_density(self) -> float:
+        return self.density
+
+
+MATERIALS = {"mu_i": MuIMaterial, "elastoplastic": ElastoplasticMaterial}
 
 
 class AnyMaterial:
@@ -178,10 +223,19 @@ class ParticleBlock:
     velocity: Optional[Tuple[float, ...]] = _key("initial velocity (default at rest)", None, "m/s")
     initial_stress: Literal["hydrostatic", "zero"] = _key(
         "hydrostatic: pressure of the overburden of this block; zero: unstressed", "hydrostatic")
+    shape: Literal["box", "cylinder"] = _key(
+        "box: the whole box; cylinder (3D): the vertical cylinder inscribed in the box, whose horizontal "
+        "extent must then be square", "box")
 
     def check(self, path: str, dim: int, domain: Domain, spacing: float) -> None:
         _check_vector(f"{path}.lower", self.lower, dim)
         _check_vector(f"{path}.upper", self.upper, dim)
+        if self.shape == "cylinder":
+            if dim != 3:
+                raise ConfigError(f"{path}.shape", "a cylinder needs dimension 3 (in 2D a column is a box)")
+            wx, wy = self.upper[0] - self.lower[0], self.upper[1] - self.lower[1]
+            if abs(wx - wy) > 1e-9 * max(wx, wy):
+                raise ConfigError(f"{path}.upper", f"a cylinder's box needs a square footprint, got {wx} x {wy} m")
         if self.velocity is not None:
             _check_vector(f"{path}.velocity", self.velocity, dim)
         for a in range(dim):
@@ -197,12 +251,17 @@ class Wall:
 
     ``ghost`` (mu(I), MODEL.md section 1): fixed ghost particles of [M34]-[M36], laid on the
     material lattice behind the plane, as many layers as the kernel support needs.
+    ``dynamic`` ([A], Dalrymple & Knio 2001): fixed boundary particles behind the plane whose
+    density follows the continuity equation and whose pressure the equation of state; rows are
+    staggered by dp/2 along the wall so that no gap lines up.
     """
 
     normal: Tuple[float, ...] = _key("unit normal of the plane, pointing into the material")
     point: Tuple[float, ...] = _key("a point on the plane", unit="m")
     name: str = _key("label used in messages", "wall")
-    type: Literal["ghost"] = _key("boundary model", "ghost")
+    type: Literal["ghost", "dynamic"] = _key(
+        "boundary model: ghost (mu(I), [M34]-[M36]) or dynamic (boundary particles that obey continuity and "
+        "the equation of state, Dalrymple & Knio 2001, as in [A])", "ghost")
     lower: Optional[Tuple[float, ...]] = _key("lower corner of the box that clips the wall (default domain)", None, "m")
     upper: Optional[Tuple[float, ...]] = _key("upper corner of the box that clips the wall (default domain)", None, "m")
     max_velocity_factor: float = _key(
@@ -287,6 +346,9 @@ class Numerics:
     artificial_viscosity: ArtificialViscosity = _key("Monaghan artificial viscosity [M38]", ArtificialViscosity())
     density_diffusion: float = _key(
         "delta of the delta-SPH density diffusion term in the continuity equation (0 = off)", 0.02, "-")
+    stress_diffusion: float = _key(
+        "delta_s of the diffusion of integrated stress tensors (physics/stress_diffusion.py; 0 = off; "
+        "models with a stress history only)", 0.0, "-")
     particle_shifting: ParticleShifting = _key("particle shifting against particle-scale disorder",
                                                ParticleShifting())
     min_time_step: float = _key("the run stops if the stable time step falls below this", 1e-9, "s")
@@ -300,8 +362,9 @@ class Numerics:
         _positive(f"{path}.min_time_step", self.min_time_step)
         self.artificial_viscosity.check(f"{path}.artificial_viscosity")
         self.particle_shifting.check(f"{path}.particle_shifting")
-        if not 0.0 <= self.density_diffusion <= 1.0:
-            raise ConfigError(f"{path}.density_diffusion", f"must lie in [0, 1], got {self.density_diffusion}")
+        for key in ("density_diffusion", "stress_diffusion"):
+            if not 0.0 <= getattr(self, key) <= 1.0:
+                raise ConfigError(f"{path}.{key}", f"must lie in [0, 1], got {getattr(self, key)}")
 
     @property
     def smoothing_length(self) -> float:
@@ -414,6 +477,11 @@ class Scene:
             block.check(f"particles[{k}]", dim, self.domain, dp)
         for k, wall in enumerate(self.walls):
             wall.check(f"walls[{k}]", dim)
+            if self.material.model == "mu_i" and wall.type != "ghost":
+                raise ConfigError(f"walls[{k}].type", "the mu(I) model of [M] uses ghost walls [M34]-[M36]")
+        if self.material.model == "mu_i" and self.numerics.stress_diffusion > 0.0:
+            raise ConfigError("numerics.stress_diffusion", "mu(I) integrates no stress (its stress is algebraic); "
+                                                           "set it to 0")
         support = 2.0 * self.numerics.smoothing_length
         for a, name in enumerate(AXES[:dim]):
             if name in self.domain.periodic and self.domain.size[a] < 3 * support:

@@ -1,7 +1,9 @@
 """Time integration (MODEL.md section 0) and time-step control [M39].
 
-Both integrators advance material particles only (boundary particles are moved, if at all, by
-their own stages) and wrap positions along periodic axes.
+Both integrators advance material particles (and the density of boundary particles whose
+density evolves, MODEL.md section 3) and wrap positions along periodic axes; boundary particles
+are moved, if at all, by their own stages. A model's integrated tensors (``model.history``:
+the deviatoric stress of [A6]) are advanced like the density.
 
 - Symplectic Verlet, kick-drift-kick [M, Sec. 3.5] (Kajtar & Monaghan 2008): one rate
   evaluation per step. Half step of positions, velocities and density with v(n), the last
@@ -36,6 +38,8 @@ class _Update(Stage):
         super().__init__(ctx)
         self.shifting = ctx.scene.numerics.particle_shifting.enabled
         self.taylor_velocity = self.shifting and "velocity_gradient" in ctx.state.specs
+        # the model's integrated tensors (the elastoplastic deviatoric stress): (field, rate, start)
+        self.history = [tuple(ctx.state.field(name) for name in names) for names in ctx.model.history]
 
     @ti.func
     def wrap(self, i):
@@ -43,21 +47,26 @@ class _Update(Stage):
 
     @ti.kernel
     def half_step(self, dt: float):
-        """Keep (x, v, rho) at n; x += dt/2 v(n); v += dt/2 a; rho += dt/2 d rho/dt."""
+        """Keep (x, v, rho, history) at n; x += dt/2 v(n); v += dt/2 a; rho += dt/2 d rho/dt."""
         ti.loop_config(serialize=runtime.serial_loops)
         for i in range(self.state.n_material):
             self.state.position_start[i] = self.state.position[i]
             self.state.velocity_start[i] = self.state.velocity[i]
-            self.state.density_start[i] = self.state.density[i]
-            self.state.density[i] += 0.5 * dt * self.state.density_rate[i]
             self.state.velocity[i] += 0.5 * dt * self.state.acceleration[i]
             self.state.position[i] += 0.5 * dt * self.drift_velocity(i)
             self.wrap(i)
+            for field, rate, start in ti.static(self.history):
+                start[i] = field[i]
+                field[i] += 0.5 * dt * rate[i]
+        ti.loop_config(serialize=runtime.serial_loops)
+        for i in range(self.state.density_rate.shape[0]):  # material, and walls whose density evolves
+            self.state.density_start[i] = self.state.density[i]
+            self.state.density[i] += 0.5 * dt * self.state.density_rate[i]
 
     @ti.kernel
     def full_step(self, dt: float):
-        """v(n+1) = v(n) + dt a; x(n+1) = x(n) + dt (v(n) + v(n+1))/2; rho(n+1) = rho(n) + dt d rho/dt;
-        then the particle shift, if enabled."""
+        """v(n+1) = v(n) + dt a; x(n+1) = x(n) + dt (v(n) + v(n+1))/2; rho(n+1) = rho(n) + dt d rho/dt
+        (history fields alike); then the particle shift, if enabled."""
         ti.loop_config(serialize=runtime.serial_loops)
         for i in range(self.state.n_material):
             v_new = self.state.velocity_start[i] + dt * self.state.acceleration[i]
@@ -69,8 +78,12 @@ class _Update(Stage):
                     v_new += self.state.velocity_gradient[i] @ shift
             self.state.position[i] = x_new
             self.state.velocity[i] = v_new
-            self.state.density[i] = self.state.density_start[i] + dt * self.state.density_rate[i]
             self.wrap(i)
+            for field, rate, start in ti.static(self.history):
+                field[i] = start[i] + dt * rate[i]
+        ti.loop_config(serialize=runtime.serial_loops)
+        for i in range(self.state.density_rate.shape[0]):
+            self.state.density[i] = self.state.density_start[i] + dt * self.state.density_rate[i]
 
 
 @ti.data_oriented

@@ -55,24 +55,23 @@ class Scheme:
     def __init__(self, scene: Scene, profiler: StageProfiler = None, initial: InitialParticles = None):
         self.scene = scene
         self.profiler = profiler or StageProfiler(False)
-        dim = scene.dimension
-        h = scene.numerics.smoothing_length
-        model = MODELS[scene.material.model](scene.material, dim, h, scene.precision)
+        model = MODELS[scene.material.model].from_scene(scene)
         self.initial = initial if initial is not None else build_initial(scene, model)
         walls_cls = boundary_class(scene)
         rate_classes = rate_stage_classes(scene, model)
         integrator_cls = INTEGRATORS[scene.numerics.integrator]
         gradient_cls = GRADIENTS[scene.numerics.gradient_correction]
         specs = merge_specs([model.fields, walls_cls.fields, integrator_cls.fields, gradient_cls.fields]
-                            + [cls.fields for cls in rate_classes])
+                            + [cls.fields for cls in rate_classes + model.update_stage_classes()])
         ini = self.initial
         runtime.choose_loops(ini.n_total)
-        self.state = ParticleState(dim, ini.n_material, ini.n_wall, specs)
+        self.state = ParticleState(scene.dimension, ini.n_material, ini.n_wall, specs)
+        wall_fields = {k: v for k, v in ini.wall_fields.items() if self.state.has(k)}
         self.state.load({"position": ini.position, "velocity": ini.velocity, "mass": ini.mass,
-                         "density": ini.density, "pressure": ini.pressure, **ini.wall_fields})
+                         "density": ini.density, "pressure": ini.pressure, **wall_fields})
         model.state = self.state
         self.model = model
-        self.smoothing = make_smoothing(scene.numerics.smoothing_function, h, dim)
+        self.smoothing = make_smoothing(scene.numerics.smoothing_function, scene.numerics.smoothing_length, scene.dimension)
         self.grid = NeighborGrid(self.state.position, scene.domain.lower, scene.domain.upper,
                                  scene.domain.periodic_mask, self.smoothing.support)
         self.walls = walls_cls(self.state, scene.gravity_vector)
@@ -81,7 +80,8 @@ class Scheme:
         ctx.gradient = self.gradient = gradient_cls(ctx)
         self.rate_stages = [cls(ctx) for cls in rate_classes]
         self.integrator = integrator_cls(ctx)
-        self.position_stages = [cls(ctx) for cls in walls_cls.position_stage_classes()]
+        # after every update: walls act on the new positions, the model on the new state
+        self.position_stages = [cls(ctx) for cls in walls_cls.position_stage_classes() + model.update_stage_classes()]
         self.time_step = StableTimeStep(ctx)
 
     # ---- stepping -----------------------------------------------------------------------------

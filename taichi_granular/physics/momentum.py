@@ -18,7 +18,8 @@ Morris/Cleary pairwise viscous term and gravity,
   viscous term of [M27] applied to the velocity *residual*
       v_ij - (grad v_i + grad v_j)/2 . x_ij,
   which vanishes for every quadratic velocity field (the smooth flow is left to the stress)
-  and damps the particle-scale modes; like the rest it is antisymmetric in (i, j).
+  and damps the particle-scale modes; like the rest it is antisymmetric in (i, j). Models
+  without a viscosity (elastoplastic) leave this to Monaghan's artificial viscosity [A16].
 
 Both sums are antisymmetric in (i, j): momentum is conserved to round-off between material
 particles.
@@ -83,20 +84,27 @@ class StressMomentum(_Momentum):
     name = "momentum_stress"
     equation = "[A12]"
 
+    def __init__(self, ctx):
+        super().__init__(ctx)
+        # the residual damping needs a viscosity (mu(I)); elastic models are damped by [A16]
+        self.viscous_residual = ctx.state.has("viscosity")
+
     @ti.func
     def pair(self, i, j, x_ij, r, acc: ti.template()):
         s = self.state
         k = self.walls.state_index(i, j)
         identity = ti.Matrix.identity(float, self.dim)
         sigma_i = self.model.deviatoric_stress(i) - s.pressure[i] * identity
-        sigma_j = self.walls.stress(i, j, x_ij, self.model.deviatoric_stress(k) - s.pressure[k] * identity)
+        sigma_j = self.walls.stress(i, j, x_ij, self.model.deviatoric_stress(self.walls.stress_index(i, j))
+                                    - s.pressure[k] * identity)
         term = sigma_i / s.density[i] ** 2 + sigma_j / s.density[k] ** 2
         grad_w = self.gradient.pairwise(i, j, x_ij, r)
         acc += s.mass[j] * (term @ grad_w)
-        # pairwise viscous damping of the velocity residual (zero for quadratic fields)
-        v_residual = self.walls.relative_velocity(i, j, x_ij) - \
-            0.5 * (s.velocity_gradient[i] + s.velocity_gradient[k]) @ x_ij
-        acc += self.viscous_coefficient(i, j, k, v_residual, x_ij, r) * grad_w
+        if ti.static(self.viscous_residual):
+            # pairwise viscous damping of the velocity residual (zero for quadratic fields)
+            v_residual = self.walls.relative_velocity(i, j, x_ij) - \
+                0.5 * (s.velocity_gradient[i] + s.velocity_gradient[k]) @ x_ij
+            acc += self.viscous_coefficient(i, j, k, v_residual, x_ij, r) * grad_w
 
 
 MOMENTUM = {"viscous_pair": ViscousMomentum, "stress_divergence": StressMomentum}

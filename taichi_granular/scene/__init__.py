@@ -60,11 +60,13 @@ def tangent_basis(normal: np.ndarray) -> List[np.ndarray]:
     return [t1, np.cross(n, t1)]
 
 
-def wall_lattice(point, normal, lower, upper, spacing: float, layers: int):
+def wall_lattice(point, normal, lower, upper, spacing: float, layers: int, staggered: bool = False):
     """Lattice points behind a plane, inside the box [lower, upper].
 
     Returns (positions, distance behind the plane). Points are at
-    point + (i + 1/2) dp t (+ (k + 1/2) dp t2) - (l + 1/2) dp n, l < layers.
+    point + (i + 1/2 + s_l) dp t (+ (k + 1/2 + s_l) dp t2) - (l + 1/2) dp n, l < layers, with
+    s_l = 0, or, ``staggered``, s_l = 1/2 on odd layers l, so that every gap of one row is
+    covered by a particle of the next (Dalrymple & Knio's staggered boundary rows).
     """
     point = np.asarray(point, float)
     normal = np.asarray(normal, float)
@@ -79,9 +81,10 @@ def wall_lattice(point, normal, lower, upper, spacing: float, layers: int):
     grids = np.meshgrid(*ranges, np.arange(layers), indexing="ij")
     coords = [g.ravel() for g in grids]
     depth = (coords[-1] + 0.5) * spacing
+    shift = 0.5 * (coords[-1] % 2) if staggered else np.zeros_like(depth)
     pos = point - depth[:, None] * normal
     for t, c in zip(tangents, coords[:-1]):
-        pos = pos + ((c + 0.5) * spacing)[:, None] * t
+        pos = pos + ((c + 0.5 + shift) * spacing)[:, None] * t
     tol = 1e-9 * max(1.0, float(np.max(np.abs(upper - lower))))
     inside = np.all((pos >= lower - tol) & (pos <= upper + tol), axis=1)
     return pos[inside], depth[inside]
@@ -127,6 +130,10 @@ def build_initial(scene: Scene, model) -> InitialParticles:
     positions, velocities, pressures, block_of = [], [], [], []
     for k, block in enumerate(scene.particles):
         pts = lattice_box(block.lower, block.upper, dp)
+        if block.shape == "cylinder":  # the vertical cylinder inscribed in the box
+            centre = 0.5 * (np.array(block.lower[:2]) + np.array(block.upper[:2]))
+            radius = 0.5 * (block.upper[0] - block.lower[0])
+            pts = pts[np.sum((pts[:, :2] - centre) ** 2, axis=1) <= radius**2]
         if len(pts) == 0:
             raise ConfigError(f"particles[{k}]", "box holds no particle at this spacing")
         positions.append(pts)
@@ -149,7 +156,8 @@ def build_initial(scene: Scene, model) -> InitialParticles:
     for w, wall in enumerate(scene.walls):
         lower = wall.lower if wall.lower is not None else scene.domain.lower
         upper = wall.upper if wall.upper is not None else scene.domain.upper
-        pts, depth = wall_lattice(wall.point, wall.normal, lower, upper, dp, layers)
+        pts, depth = wall_lattice(wall.point, wall.normal, lower, upper, dp, layers,
+                                  staggered=wall.type == "dynamic")
         behind = (x_mat - np.array(wall.point)) @ np.array(wall.normal) < 0
         inside = np.all((x_mat >= np.array(lower) - 1e-12) & (x_mat <= np.array(upper) + 1e-12), axis=1)
         if np.any(behind & inside):

@@ -1,11 +1,12 @@
 """Validation 2 of [M]: collapse of a 2D granular column (MODEL.md section 1, Table 3).
 
-A column of half-width r0 and height H0 = a r0 is released on a rough floor and spreads to a
-deposit of half-width r_inf. Reference: the run-out scaling of Lube et al. (2004),
+A column of half-width r0 (2D) or radius r0 (3D, a cylinder) and height H0 = a r0 is released
+on a rough floor and spreads to a deposit of half-width or radius r_inf. Reference: the run-out scaling of Lube et al. (2004),
     (r_inf - r0)/r0 = 1.24 a (a < 1.7),  1.6 a^(1/2) (a > 1.7).
-Measured per frame: the two fronts (the outermost particle, plus its radius, among particles
-with a neighbour within 1.5 dp: a grain left ahead of the flow is not the front), their mean
-distance from the column axis, the deposit height (the highest particle top), and the
+Measured per frame: the fronts (the outermost particle, plus its radius, among particles
+with a neighbour within 1.5 dp: a grain left ahead of the flow is not the front) -- in 2D the
+left and right ones, in 3D the outermost in each of SECTORS equal azimuthal sectors around
+the axis -- their mean distance from the column axis, the deposit height (the highest particle top), and the
 particles that have escaped (no other particle within the kernel support 2h).
 r0 and H0 are measured the same way on the first frame (the column as laid on the particle
 lattice), and a = H0/r0. The column is at rest when the kinetic energy has fallen below 1e-3 of its peak.
@@ -32,6 +33,7 @@ from ..config import Scene
 
 REST_FRACTION = 1e-3  # at rest: kinetic energy below this share of its peak
 FRONT_STOP_FRACTION = 0.05  # the front has stopped: its speed below this share of its peak speed
+SECTORS = 16  # 3D: azimuthal sectors whose outermost particles make the front
 
 
 def lube_runout(aspect_ratio: float) -> float:
@@ -39,10 +41,11 @@ def lube_runout(aspect_ratio: float) -> float:
     return 1.24 * aspect_ratio if aspect_ratio < 1.7 else 1.6 * math.sqrt(aspect_ratio)
 
 
-def column_axis(scene: Scene) -> float:
-    """x of the axis of the scene's first particle block  [m]."""
+def column_axis(scene: Scene) -> np.ndarray:
+    """Horizontal position of the axis of the scene's first particle block: x in 2D, (x, y) in 3D  [m]."""
     block = scene.particles[0]
-    return 0.5 * (block.lower[0] + block.upper[0])
+    horizontal = scene.dimension - 1
+    return 0.5 * (np.array(block.lower[:horizontal]) + np.array(block.upper[:horizontal]))
 
 
 def connected(position: np.ndarray, reach: float) -> np.ndarray:
@@ -65,21 +68,32 @@ def connected(position: np.ndarray, reach: float) -> np.ndarray:
 @dataclass
 class FrameMeasure:
     time: float
-    front_right: float  # [m] from the axis
-    front_left: float  # [m] from the axis
+    front_right: float  # [m] from the axis; 3D: the farthest sector front
+    front_left: float  # [m] from the axis; 3D: the nearest sector front
+    front_mean: float  # [m] from the axis: mean of the two fronts (2D) or of the sector fronts (3D)
     height: float  # [m]
     escaped: int  # particles with no other particle within the kernel support 2h
 
 
-def measure_frame(arrays: Dict[str, np.ndarray], n_material: int, centre: float, spacing: float,
+def measure_frame(arrays: Dict[str, np.ndarray], n_material: int, centre: np.ndarray, spacing: float,
                   time: float, support: float) -> FrameMeasure:
     x = np.asarray(arrays["position"][:n_material], float)
-    radius = 0.5 * np.sqrt(arrays["mass"][:n_material] / arrays["density"][:n_material])
+    dim = x.shape[1]
+    # particle radius: half the edge of its lattice cell of volume m/rho, so that the column as
+    # laid measures r0 = the block's half-width
+    radius = 0.5 * (arrays["mass"][:n_material] / arrays["density"][:n_material]) ** (1.0 / dim)
     ok = connected(x, 1.5 * spacing)
-    rel = x[ok, 0] - centre
-    return FrameMeasure(time=time, front_right=float(np.max(rel + radius[ok])),
-                        front_left=float(np.max(-rel + radius[ok])),
-                        height=float(np.max(x[ok, 1] + radius[ok])),
+    rel = x[ok, : dim - 1] - centre
+    if dim == 2:
+        fronts = np.array([np.max(rel[:, 0] + radius[ok]), np.max(-rel[:, 0] + radius[ok])])
+    else:
+        distance = np.hypot(rel[:, 0], rel[:, 1]) + radius[ok]
+        sector = np.floor((np.arctan2(rel[:, 1], rel[:, 0]) + math.pi) / (2 * math.pi) * SECTORS).astype(int)
+        sector = np.clip(sector, 0, SECTORS - 1)
+        fronts = np.array([distance[sector == k].max() for k in range(SECTORS) if np.any(sector == k)])
+    return FrameMeasure(time=time, front_right=float(fronts.max()), front_left=float(fronts.min()),
+                        front_mean=float(fronts.mean()),
+                        height=float(np.max(x[ok, dim - 1] + radius[ok])),
                         escaped=int(n_material - connected(x, support).sum()))
 
 
@@ -142,17 +156,19 @@ def time_to_rest(times: Sequence[float], kinetic_energy: Sequence[float]) -> Opt
 
 
 def evaluate(scene: Scene, times: Sequence[float], frames: Sequence[Dict[str, np.ndarray]],
-             diagnostics: Sequence[dict]) -> CollapseResult:
+             diagnostics: Sequence[dict], read_at_end: bool = False) -> CollapseResult:
+    """Measures of a collapse run; the run-out is read when the front stops, or with
+    ``read_at_end`` at the last frame (models whose deposit comes to rest: elastoplastic)."""
     centre = column_axis(scene)
     spacing = scene.numerics.particle_spacing
     n_material = int(np.sum(frames[0]["is_wall"] == 0))
     support = 2.0 * scene.numerics.smoothing_length
     fronts = [measure_frame(f, n_material, centre, spacing, t, support) for t, f in zip(times, frames)]
-    mean = [0.5 * (m.front_right + m.front_left) for m in fronts]
+    mean = [m.front_mean for m in fronts]
     first, final = fronts[0], fronts[-1]
     r0, height = mean[0], first.height  # as laid on the lattice
     stop = front_stop(times, mean)
-    read = stop if stop is not None else len(fronts) - 1
+    read = stop if stop is not None and not read_at_end else len(fronts) - 1
     t_end = float(times[-1])
     creep = (mean[-1] - mean[read]) / (t_end - times[read]) if t_end > times[read] else 0.0
     ke = [d["kinetic_energy"] for d in diagnostics]
@@ -172,9 +188,9 @@ def write_fronts_csv(result: CollapseResult, path: Path) -> None:
 
     buf = io.StringIO()
     writer = csv.writer(buf)
+    # 2D: right and left fronts; 3D: the farthest and nearest of the sector fronts
     writer.writerow(["t", "front_right", "front_left", "front_mean", "runout_normalised", "height"])
     for m in result.fronts:
-        mean = 0.5 * (m.front_right + m.front_left)
-        writer.writerow([f"{m.time:.6g}", f"{m.front_right:.6g}", f"{m.front_left:.6g}", f"{mean:.6g}",
-                         f"{(mean - result.r0) / result.r0:.6g}", f"{m.height:.6g}"])
+        writer.writerow([f"{m.time:.6g}", f"{m.front_right:.6g}", f"{m.front_left:.6g}", f"{m.front_mean:.6g}",
+                         f"{(m.front_mean - result.r0) / result.r0:.6g}", f"{m.height:.6g}"])
     atomic_write_text(path, buf.getvalue())

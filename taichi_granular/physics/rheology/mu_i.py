@@ -59,6 +59,13 @@ class MuIRheology:
         self.size_exponent = 0.0 if dim == 2 else 1.0 / 3.0  # e of the module docstring
         self.root_tolerance = 1e-14 if precision == "f64" else 2e-7
 
+    @classmethod
+    def from_scene(cls, scene):
+        return cls(scene.material, scene.dimension, scene.numerics.smoothing_length, scene.precision)
+
+    # integrated per-particle quantities besides x, v, rho: none (the stress is algebraic)
+    history = ()
+
     # ---- [M44], [M41]: grain density and pressure -------------------------------------------
 
     @ti.func
@@ -186,6 +193,10 @@ class MuIRheology:
         from ..strain_rate import StrainRate
         return [Continuity, StrainRate, GrainDensityPressure, RegularisedViscosity,
                 MOMENTUM[scene.numerics.momentum]]
+
+    def update_stage_classes(self):
+        """Stages run after each integrator update: none."""
+        return []
 
 
 @ti.data_oriented

@@ -3,10 +3,14 @@
 - ``state_index(i, j)``: the particle whose density, pressure, viscosity... j carries in the
   pair (j itself, or i for ghost particles that mirror the material they face);
 - ``relative_velocity(i, j, x_ij)``: the v_ij to use in every pair term [m/s];
+- ``stress_index(i, j)``: the particle whose deviatoric stress j carries (the state index, or i
+  for dynamic boundary particles: a rough wall), and ``stress(i, j, x_ij, sigma)`` the total
+  stress j carries given that deviatoric stress and the pressure of the state index [Pa];
 - ``stages``: the per-step stages the model needs (none for fixed ghosts).
 """
+from .dynamic import DynamicWalls
 from .ghost import GhostWalls, NoWalls
 
-BOUNDARIES = {"ghost": GhostWalls}
+BOUNDARIES = {"ghost": GhostWalls, "dynamic": DynamicWalls}
 
-__all__ = ["BOUNDARIES", "GhostWalls", "NoWalls"]
+__all__ = ["BOUNDARIES", "DynamicWalls", "GhostWalls", "NoWalls"]

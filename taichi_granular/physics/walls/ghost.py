@@ -58,8 +58,13 @@ class NoWalls:
         return self.state.pressure[j]
 
     @ti.func
+    def stress_index(self, i, j):
+        """The particle whose deviatoric stress j carries in the pair."""
+        return self.state_index(i, j)
+
+    @ti.func
     def stress(self, i, j, x_ij, sigma_k):
-        """Stress of neighbour j given sigma_k, the stress of state_index(i, j)  [Pa]."""
+        """Stress of neighbour j given sigma_k = s(stress_index) - p(state_index)  [Pa]."""
         return sigma_k
 
 
