@@ -8,6 +8,7 @@ from taichi_granular.config import load_scene
 from taichi_granular.paths import config_path
 from taichi_granular.simulation import Simulation
 from taichi_granular.validation import column_collapse as cc
+from scenes import run_frames
 
 
 def test_lube_scaling_is_continuous_enough_and_has_its_two_branches():
@@ -50,18 +51,8 @@ def test_coarse_collapse_spreads_towards_the_lube_runout():
     here; see README)."""
     scene = load_scene(config_path("mu_i/collapse_a0_90.yaml"),
                        ["numerics.particle_spacing=0.009", "run.end_time=0.5", "run.output_interval=0.05"])
-    sim = Simulation(scene)
-    n = sim.state.n_material
-    is_wall = np.r_[np.zeros(n, int), np.ones(sim.state.n_wall, int)]
-    times, frames, diagnostics = [], [], []
-    sim.run(end_time=0.0)  # initial rates and equation of state, no step
-    while True:
-        times.append(sim.t)
-        frames.append({**sim.scheme.snapshot(), "is_wall": is_wall})
-        if sim.t >= 0.5 - 1e-9:
-            break
-        sim.run(end_time=min(0.5, sim.t + 0.05))
-        diagnostics.append(sim.last_diagnostics)
+    times, frames, diagnostics = run_frames(scene, 0.05)
+    n = int(np.sum(frames[0]["is_wall"] == 0))
     result = cc.evaluate(scene, times, frames, diagnostics)
     assert 150 <= n <= 400
     assert result.escaped == 0
