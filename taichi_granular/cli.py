@@ -82,6 +82,9 @@ def cmd_validate(args) -> int:
     if args.case in ("column-collapse", "column-collapse-3d"):
         from .validation.cli import validate_column_collapse
         return validate_column_collapse(args)
+    if args.case == "stake-rows":
+        from .validation.cli import validate_stake_rows
+        return validate_stake_rows(args)
     raise AssertionError(args.case)
 
 
@@ -135,10 +138,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=cmd_render)
 
     p = sub.add_parser("validate", help="run a validation case and print its errors")
-    p.add_argument("case", choices=["inclined-plane", "column-collapse", "column-collapse-3d"])
+    p.add_argument("case", choices=["inclined-plane", "column-collapse", "column-collapse-3d", "stake-rows"])
     p.add_argument("--resolution", choices=["coarse", "paper"], default="coarse",
-                   help="column-collapse-3d: the coarse CPU scenes or the paper's resolution (GPU)")
-    p.add_argument("--cases", nargs="+", help="column collapse: only these (e.g. a0_90 a2_75)")
+                   help="column-collapse-3d, stake-rows: the coarse CPU scenes or the paper's resolution (GPU)")
+    p.add_argument("--cases", nargs="+", help="only these (e.g. a0_90 a2_75; case1 case3)")
     p.add_argument("--config", help="scene file (default: the bundled one)")
     p.add_argument("--out", help="output directory (default: output/validate/<case>)")
     p.add_argument("--reuse", action="store_true", help="evaluate existing output instead of running")

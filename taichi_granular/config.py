@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import dataclasses
 import difflib
+import itertools
 import math
 import typing
 from dataclasses import dataclass, field
@@ -226,10 +227,33 @@ class ParticleBlock:
     shape: Literal["box", "cylinder"] = _key(
         "box: the whole box; cylinder (3D): the vertical cylinder inscribed in the box, whose horizontal "
         "extent must then be square", "box")
+    origin: Optional[Tuple[float, ...]] = _key(
+        "lay the box in a local frame with this origin (lower and upper are then local coordinates; "
+        "default: global coordinates)", None, "m")
+    tilt_deg: float = _key("tilt of that frame about y (as obstacles: local x descends a slope of tilt_deg; the "
+                           "hydrostatic pressure then acts along the local z axis)", 0.0, "deg")
+
+    @property
+    def framed(self) -> bool:
+        return self.origin is not None or self.tilt_deg != 0.0
+
+    def corners(self) -> list:
+        """Global coordinates of the box's corners  [m]."""
+        from .scene.geometry import to_global
+
+        local = [list(c) for c in itertools.product(*zip(self.lower, self.upper))]
+        return to_global(local, self.origin, self.tilt_deg).tolist() if self.framed else local
 
     def check(self, path: str, dim: int, domain: Domain, spacing: float) -> None:
         _check_vector(f"{path}.lower", self.lower, dim)
         _check_vector(f"{path}.upper", self.upper, dim)
+        if self.origin is not None:
+            _check_vector(f"{path}.origin", self.origin, dim)
+        if not -90.0 < self.tilt_deg < 90.0:
+            raise ConfigError(f"{path}.tilt_deg", f"must lie in (-90, 90) deg, got {self.tilt_deg}")
+        if self.shape == "cylinder" and self.framed:
+            raise ConfigError(f"{path}.shape", "a cylinder block stands upright in global coordinates (no origin "
+                                               "or tilt_deg)")
         if self.shape == "cylinder":
             if dim != 3:
                 raise ConfigError(f"{path}.shape", "a cylinder needs dimension 3 (in 2D a column is a box)")
@@ -241,8 +265,11 @@ class ParticleBlock:
         for a in range(dim):
             if self.upper[a] - self.lower[a] < spacing * (1 - 1e-9):
                 raise ConfigError(f"{path}.upper", f"box thinner than one particle spacing along axis {AXES[a]}")
-            if self.lower[a] < domain.lower[a] - 1e-12 or self.upper[a] > domain.upper[a] + 1e-12:
-                raise ConfigError(path, f"box [{self.lower}, {self.upper}] leaves the domain along axis {AXES[a]}")
+        for corner in self.corners():
+            for a in range(dim):
+                if not domain.lower[a] - 1e-12 <= corner[a] <= domain.upper[a] + 1e-12:
+                    raise ConfigError(path, f"box [{self.lower}, {self.upper}] leaves the domain along axis "
+                                            f"{AXES[a]} (corner {[round(c, 6) for c in corner]})")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -282,6 +309,164 @@ class Wall:
                 _check_vector(f"{path}.{key}", getattr(self, key), dim)
         if not 1.0 <= self.max_velocity_factor <= 100.0:
             raise ConfigError(f"{path}.max_velocity_factor", "beta_max must lie in [1, 100] [M36]")
+
+
+@dataclass(frozen=True, kw_only=True)
+class _Obstacle:
+    """A fixed solid laid as dynamic boundary particles (scene/geometry.py), placed by a rigid
+    frame: ``origin`` and a tilt about the y axis (3D; z in 2D) so that the local x axis runs
+    down a slope of ``tilt_deg`` (x' = (cos, 0, -sin), z' = (sin, 0, cos)). Local coordinates
+    below are in that frame."""
+
+    name: str = _key("label used in messages", "obstacle")
+    origin: Optional[Tuple[float, ...]] = _key("the local frame's origin (default the global origin)", None, "m")
+    tilt_deg: float = _key("slope of the local x axis below the horizontal (about y; +: x' descends)", 0.0,
+                           "deg")
+    dimensions = (3,)
+
+    def check(self, path: str, dim: int) -> None:
+        if dim not in self.dimensions:
+            raise ConfigError(f"{path}.shape", f"a {self.shape} obstacle needs dimension "
+                                               f"{' or '.join(map(str, self.dimensions))}")
+        if self.origin is not None:
+            _check_vector(f"{path}.origin", self.origin, dim)
+        if not -90.0 < self.tilt_deg < 90.0:
+            raise ConfigError(f"{path}.tilt_deg", f"must lie in (-90, 90) deg, got {self.tilt_deg}")
+
+    def _positive_keys(self, path: str, *keys: str) -> None:
+        for key in keys:
+            _positive(f"{path}.{key}", getattr(self, key))
+
+
+@dataclass(frozen=True, kw_only=True)
+class ChuteSegment:
+    length: float = _key("length along the slope", unit="m")
+    slope_deg: float = _key("inclination below the horizontal (+: descends along +x)", unit="deg")
+
+    def check(self, path: str) -> None:
+        _positive(f"{path}.length", self.length)
+        if not -90.0 < self.slope_deg < 90.0:
+            raise ConfigError(f"{path}.slope_deg", f"must lie in (-90, 90) deg, got {self.slope_deg}")
+
+
+@dataclass(frozen=True, kw_only=True)
+class ChuteObstacle(_Obstacle):
+    """Inclined planes joined at slope breaks, descending along +x from ``origin`` (the top of
+    the first plane, on the centre line), each ``width`` wide, with optional vertical side walls.
+    ``tilt_deg`` is not used: each segment has its own slope."""
+
+    shape: Literal["chute"] = _key("obstacle kind", "chute")
+    segments: Tuple[ChuteSegment, ...] = _key("planes from the top down")
+    width: float = _key("width across the chute (3D)", 1.0, "m")
+    side_wall_height: float = _key("height of the side walls above the bed (0: none)", 0.0, "m")
+    dimensions = (2, 3)
+
+    def check(self, path: str, dim: int) -> None:
+        super().check(path, dim)
+        if not self.segments:
+            raise ConfigError(f"{path}.segments", "a chute needs at least one segment")
+        for k, seg in enumerate(self.segments):
+            seg.check(f"{path}.segments[{k}]")
+        _positive(f"{path}.width", self.width)
+        if self.side_wall_height < 0:
+            raise ConfigError(f"{path}.side_wall_height", f"must be >= 0, got {self.side_wall_height}")
+
+
+@dataclass(frozen=True, kw_only=True)
+class BoxObstacle(_Obstacle):
+    """A solid box [lower, upper] in the local frame (posts, a building, the walls of a release
+    box)."""
+
+    shape: Literal["box"] = _key("obstacle kind", "box")
+    lower: Tuple[float, ...] = _key("lower corner, local frame", unit="m")
+    upper: Tuple[float, ...] = _key("upper corner, local frame", unit="m")
+    dimensions = (2, 3)
+
+    def check(self, path: str, dim: int) -> None:
+        super().check(path, dim)
+        _check_vector(f"{path}.lower", self.lower, dim)
+        _check_vector(f"{path}.upper", self.upper, dim)
+        for a in range(dim):
+            if self.upper[a] <= self.lower[a]:
+                raise ConfigError(f"{path}.upper", f"must exceed lower along axis {AXES[a]}")
+
+
+@dataclass(frozen=True, kw_only=True)
+class PostRowsObstacle(_Obstacle):
+    """Rows of square posts standing on the local x-y plane (a chute panel): row k at local
+    x = k row_spacing, posts of side ``post_size`` separated by ``gap`` across ``width`` centred
+    on y = 0; ``staggered`` shifts every other row by half a period (post + gap)."""
+
+    shape: Literal["post_rows"] = _key("obstacle kind", "post_rows")
+    post_size: float = _key("side of a square post", unit="m")
+    gap: float = _key("clear gap between neighbouring posts of a row", unit="m")
+    rows: int = _key("number of rows", 1)
+    row_spacing: float = _key("distance between rows along local x (post side included)", 0.0, "m")
+    width: float = _key("span of each row across local y", unit="m")
+    height: float = _key("height of the posts along local z", unit="m")
+    staggered: bool = _key("shift every other row by (post_size + gap)/2", False)
+
+    def check(self, path: str, dim: int) -> None:
+        super().check(path, dim)
+        self._positive_keys(path, "post_size", "gap", "width", "height")
+        if self.rows < 1:
+            raise ConfigError(f"{path}.rows", f"must be >= 1, got {self.rows}")
+        if self.rows > 1 and self.row_spacing < self.post_size:
+            raise ConfigError(f"{path}.row_spacing", f"rows overlap: row_spacing {self.row_spacing} m < post_size")
+
+
+@dataclass(frozen=True, kw_only=True)
+class CylinderObstacle(_Obstacle):
+    """A circular cylinder of ``radius`` standing on the local x-y plane at the origin, its axis
+    along local z (normal to a chute tilted by ``tilt_deg``)."""
+
+    shape: Literal["cylinder"] = _key("obstacle kind", "cylinder")
+    radius: float = _key("radius", unit="m")
+    height: float = _key("height along the local z axis", unit="m")
+
+    def check(self, path: str, dim: int) -> None:
+        super().check(path, dim)
+        self._positive_keys(path, "radius", "height")
+
+
+@dataclass(frozen=True, kw_only=True)
+class WedgeObstacle(_Obstacle):
+    """A tetrahedral wedge on the local x-y plane pointing up the slope (-x): its tip at the
+    origin, its rear edge at x = length from y = -width/2 to width/2, its top vertex above the
+    rear centre at z = height (after Tai et al. 2001)."""
+
+    shape: Literal["wedge"] = _key("obstacle kind", "wedge")
+    length: float = _key("tip to rear face along local x", unit="m")
+    width: float = _key("rear face width across local y", unit="m")
+    height: float = _key("rear face height along local z", unit="m")
+
+    def check(self, path: str, dim: int) -> None:
+        super().check(path, dim)
+        self._positive_keys(path, "length", "width", "height")
+
+
+@dataclass(frozen=True, kw_only=True)
+class MeshObstacle(_Obstacle):
+    """A closed triangle mesh that meshio reads (STL, OBJ, PLY, VTU...), scaled, then placed by
+    the local frame; its inside is found by the winding number of its triangles."""
+
+    shape: Literal["mesh"] = _key("obstacle kind", "mesh")
+    file: str = _key("mesh file (relative paths: from the scene file's folder)")
+    scale: float = _key("factor from the mesh's units to metres", 1.0, "-")
+
+    def check(self, path: str, dim: int) -> None:
+        super().check(path, dim)
+        _positive(f"{path}.scale", self.scale)
+        if not Path(self.file).is_file():
+            raise ConfigError(f"{path}.file", f"no such mesh file: {self.file}")
+
+
+OBSTACLES = {cls.__dataclass_fields__["shape"].default: cls
+             for cls in (ChuteObstacle, BoxObstacle, PostRowsObstacle, CylinderObstacle, WedgeObstacle, MeshObstacle)}
+
+
+class AnyObstacle:
+    """Annotation marker: the ``shape`` key picks the class from :data:`OBSTACLES`."""
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -457,6 +642,8 @@ class Scene:
     precision: Literal["f32", "f64"] = _key("floating point precision of all fields", "f64")
     gravity: Gravity = _key("gravitational acceleration", Gravity())
     walls: Tuple[Wall, ...] = _key("walls as boundary particles", ())
+    obstacles: Tuple[AnyObstacle, ...] = _key(
+        "solids laid as dynamic boundary particles: chute, box, post_rows, cylinder, wedge, mesh", ())
     render: Render = _key("PNG frames", Render())
 
     def check(self) -> None:
@@ -479,6 +666,14 @@ class Scene:
             wall.check(f"walls[{k}]", dim)
             if self.material.model == "mu_i" and wall.type != "ghost":
                 raise ConfigError(f"walls[{k}].type", "the mu(I) model of [M] uses ghost walls [M34]-[M36]")
+        for k, obstacle in enumerate(self.obstacles):
+            obstacle.check(f"obstacles[{k}]", dim)
+            if any(w.type != "dynamic" for w in self.walls):
+                raise ConfigError(f"obstacles[{k}]", "obstacles are dynamic boundary particles; every wall of the "
+                                                     "scene must then be of type dynamic")
+            if self.material.model == "mu_i":
+                raise ConfigError(f"obstacles[{k}]", "the mu(I) model of [M] uses ghost walls [M34]-[M36]; "
+                                                     "obstacles are dynamic boundary particles")
         if self.material.model == "mu_i" and self.numerics.stress_diffusion > 0.0:
             raise ConfigError("numerics.stress_diffusion", "mu(I) integrates no stress (its stress is algebraic); "
                                                            "set it to 0")
@@ -565,8 +760,8 @@ def _convert(tp: Any, value: Any, path: str) -> Any:
             raise ConfigError(path, f"expected a list, got {_type_name(value)} {value!r}")
         item_tp = args[0]
         return tuple(_convert(item_tp, v, _join(path, k)) for k, v in enumerate(value))
-    if tp is AnyMaterial:
-        return _load_material(value, path)
+    if tp in TAGGED:
+        return _load_tagged(value, path, *TAGGED[tp])
     if dataclasses.is_dataclass(tp):
         return _load_dataclass(tp, value, path)
     if tp is float:
@@ -613,15 +808,19 @@ def _load_dataclass(cls: type, data: Any, path: str) -> Any:
     return cls(**kwargs)
 
 
-def _load_material(data: Any, path: str) -> Any:
+def _load_tagged(data: Any, path: str, tag: str, registry: dict) -> Any:
+    """A section whose ``tag`` key (material.model, obstacles[k].shape) picks its class."""
     if not isinstance(data, dict):
         raise ConfigError(path, f"expected a mapping of keys, got {_type_name(data)}")
-    if "model" not in data:
-        raise ConfigError(_join(path, "model"), f"missing required key; one of {sorted(MATERIALS)}")
-    model = data["model"]
-    if model not in MATERIALS:
-        raise ConfigError(_join(path, "model"), f"unknown model {model!r}; {_suggest(str(model), MATERIALS)}")
-    return _load_dataclass(MATERIALS[model], data, path)
+    if tag not in data:
+        raise ConfigError(_join(path, tag), f"missing required key; one of {sorted(registry)}")
+    value = data[tag]
+    if value not in registry:
+        raise ConfigError(_join(path, tag), f"unknown {tag} {value!r}; {_suggest(str(value), registry)}")
+    return _load_dataclass(registry[value], data, path)
+
+
+TAGGED = {AnyMaterial: ("model", MATERIALS), AnyObstacle: ("shape", OBSTACLES)}
 
 
 def apply_overrides(data: dict, overrides: typing.Iterable[str]) -> dict:
@@ -660,6 +859,10 @@ def load_scene(path: Union[str, Path], overrides: typing.Iterable[str] = ()) -> 
         raise ConfigError("", f"{path} is not valid YAML: {err}") from None
     if overrides and isinstance(data, dict):
         data = apply_overrides(data, overrides)
+    if isinstance(data, dict) and isinstance(data.get("obstacles"), list):  # mesh files: from the scene's folder
+        for item in data["obstacles"]:
+            if isinstance(item, dict) and isinstance(item.get("file"), str) and not Path(item["file"]).is_absolute():
+                item["file"] = str(path.parent / item["file"])
     return scene_from_dict(data, name=path.stem)
 
 

@@ -26,7 +26,7 @@ from .config import ConfigError, Scene
 
 
 def boundary_class(scene: Scene):
-    types = sorted({w.type for w in scene.walls})
+    types = sorted({w.type for w in scene.walls} | ({"dynamic"} if scene.obstacles else set()))
     if not types:
         return NoWalls
     if len(types) > 1:

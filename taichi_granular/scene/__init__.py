@@ -14,6 +14,7 @@ from typing import Callable, Dict, List
 import numpy as np
 
 from ..config import ConfigError, Scene
+from .geometry import local_axes, obstacle_particles, to_global
 
 
 @dataclass
@@ -130,20 +131,25 @@ def build_initial(scene: Scene, model) -> InitialParticles:
     positions, velocities, pressures, block_of = [], [], [], []
     for k, block in enumerate(scene.particles):
         pts = lattice_box(block.lower, block.upper, dp)
+        block_g_normal, top = g_normal, block.upper[dim - 1]
+        if block.framed:  # lattice and overburden in the block's own frame
+            block_g_normal = -float(g @ local_axes(block.tilt_deg, dim)[:, -1])
         if block.shape == "cylinder":  # the vertical cylinder inscribed in the box
             centre = 0.5 * (np.array(block.lower[:2]) + np.array(block.upper[:2]))
             radius = 0.5 * (block.upper[0] - block.lower[0])
             pts = pts[np.sum((pts[:, :2] - centre) ** 2, axis=1) <= radius**2]
         if len(pts) == 0:
             raise ConfigError(f"particles[{k}]", "box holds no particle at this spacing")
-        positions.append(pts)
         vel = np.zeros_like(pts) if block.velocity is None else np.tile(np.array(block.velocity, float), (len(pts), 1))
         velocities.append(vel)
         if block.initial_stress == "hydrostatic":
-            depth = block.upper[dim - 1] - pts[:, dim - 1]
-            pressures.append(hydrostatic_pressure(depth, g_normal, model.initial_density))
+            depth = top - pts[:, dim - 1]
+            pressures.append(hydrostatic_pressure(depth, block_g_normal, model.initial_density))
         else:
             pressures.append(np.zeros(len(pts)))
+        if block.framed:
+            pts = to_global(pts, block.origin, block.tilt_deg)
+        positions.append(pts)
         block_of.append(np.full(len(pts), k))
     x_mat = np.concatenate(positions)
     block_of = np.concatenate(block_of)
@@ -172,6 +178,16 @@ def build_initial(scene: Scene, model) -> InitialParticles:
         wall_beta.append(np.full(len(pts), wall.max_velocity_factor))
         wall_extrap.append(np.full(len(pts), 1.0 if wall.ghost_stress == "extrapolated" else 0.0))
         wall_of.append(np.full(len(pts), w))
+    for k, obstacle in enumerate(scene.obstacles):
+        pts = obstacle_particles(obstacle, dim, dp, layers)
+        if len(pts) == 0:
+            raise ConfigError(f"obstacles[{k}]", f"obstacle '{obstacle.name}' holds no particle at this spacing")
+        wall_pos.append(pts)
+        wall_depth.append(np.zeros(len(pts)))
+        wall_normal.append(np.zeros((len(pts), dim)))
+        wall_beta.append(np.ones(len(pts)))
+        wall_extrap.append(np.zeros(len(pts)))
+        wall_of.append(np.full(len(pts), len(scene.walls) + k))
     if wall_pos:
         x_wall, keep = _unique_points(np.concatenate(wall_pos), dp)
         wall_fields = {"wall_distance": np.concatenate(wall_depth)[keep],
@@ -179,8 +195,9 @@ def build_initial(scene: Scene, model) -> InitialParticles:
                        "wall_beta_max": np.concatenate(wall_beta)[keep],
                        "wall_extrapolation": np.concatenate(wall_extrap)[keep]}
         wall_of_arr = np.concatenate(wall_of)[keep]
-        _check_inside_domain(x_wall, scene, lambda i: f"walls[{wall_of_arr[i]}]",
+        _check_inside_domain(x_wall, scene, lambda i: _wall_key(scene, wall_of_arr[i]),
                              "wall particles reach outside the domain; enlarge domain")
+        _check_clear_of_walls(x_mat, x_wall, wall_of_arr, dp, scene)
     else:
         x_wall = np.zeros((0, dim))
         wall_fields, wall_of_arr = {}, np.zeros(0, int)
@@ -222,3 +239,47 @@ def _check_inside_domain(points: np.ndarray, scene: Scene, key_of, message: str)
         i = int(np.argmax(outside))
         raise ConfigError(key_of(i), f"{message}: particle at {points[i].tolist()} is outside "
                                      f"[{scene.domain.lower}, {scene.domain.upper}]")
+
+
+def _wall_key(scene: Scene, w: int) -> str:
+    """The key of the w-th boundary source: walls first, then obstacles."""
+    return f"walls[{w}]" if w < len(scene.walls) else f"obstacles[{w - len(scene.walls)}]"
+
+
+def _check_clear_of_walls(x_mat: np.ndarray, x_wall: np.ndarray, wall_of: np.ndarray, spacing: float,
+                          scene: Scene) -> None:
+    """No material particle may start closer than dp/2 to a boundary particle (inside an
+    obstacle, or a block overlapping a wall): it would be expelled on the first step."""
+    if len(x_wall) == 0 or len(x_mat) == 0:
+        return
+    lo = np.minimum(x_mat.min(axis=0), x_wall.min(axis=0))
+    dim = x_mat.shape[1]
+    cells_w = np.floor((x_wall - lo) / spacing).astype(np.int64) + 1
+    cells_m = np.floor((x_mat - lo) / spacing).astype(np.int64) + 1
+    span = np.maximum(cells_w.max(axis=0), cells_m.max(axis=0)) + 2
+    weights = np.cumprod(np.r_[1, span[:-1]])
+    key_w = cells_w @ weights
+    order = np.argsort(key_w, kind="stable")
+    sorted_keys = key_w[order]
+    nearest = np.full(len(x_mat), np.inf)
+    nearest_j = np.zeros(len(x_mat), np.int64)
+    for off in np.array(np.meshgrid(*[[-1, 0, 1]] * dim, indexing="ij")).reshape(dim, -1).T:
+        key = (cells_m + off) @ weights
+        first = np.searchsorted(sorted_keys, key, side="left")
+        last = np.searchsorted(sorted_keys, key, side="right")
+        for k in range(int((last - first).max(initial=0))):
+            has = first + k < last
+            j = order[np.minimum(first + k, len(order) - 1)]
+            d = np.where(has, np.linalg.norm(x_wall[j] - x_mat, axis=1), np.inf)
+            closer = d < nearest
+            nearest[closer], nearest_j[closer] = d[closer], j[closer]
+    bad = nearest < 0.5 * spacing * (1 - 1e-6)
+    if np.any(bad):
+        i = int(np.argmax(bad))
+        w = int(wall_of[nearest_j[i]])
+        raise ConfigError(_wall_key(scene, w), f"material particle {i} at {np.round(x_mat[i], 6).tolist()} lies "
+                                               f"within dp/2 of a boundary particle of '{_source_name(scene, w)}'")
+
+
+def _source_name(scene: Scene, w: int) -> str:
+    return scene.walls[w].name if w < len(scene.walls) else scene.obstacles[w - len(scene.walls)].name

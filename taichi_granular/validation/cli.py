@@ -37,6 +37,23 @@ def validate_inclined_plane(args) -> int:
     return 0 if ok else 1
 
 
+def _case_paths(folder: str, pattern: str, args):
+    """The scene files of a validation family: ``pattern`` names the coarse CPU variants;
+    ``--resolution paper`` picks the paper-resolution files instead; ``--cases`` filters by
+    stem or by the stem without its family prefix."""
+    if getattr(args, "resolution", "coarse") == "paper":
+        pattern = pattern.replace("_coarse", "")
+    known = sorted(p for p in config_path(folder).glob(pattern) if "_coarse" in pattern or "_coarse" not in p.stem)
+    if not args.cases:
+        return known
+    wanted = set(args.cases)
+    paths = [p for p in known if p.stem in wanted or p.stem.split("_", 1)[1] in wanted
+             or any(w in p.stem.split("_") for w in wanted)]
+    if not paths:
+        raise FileNotFoundError(f"no case among {sorted(args.cases)}; known: {', '.join(p.stem for p in known)}")
+    return paths
+
+
 # (configs folder, scene files, acceptance bound on the run-out error, read the run-out at rest)
 COLLAPSE_FAMILIES = {
     "column-collapse": ("mu_i", "collapse_a*.yaml", 0.15, False),  # 2D mu(I), Table 3 of [M]
@@ -56,16 +73,7 @@ def validate_column_collapse(args) -> int:
     from . import column_collapse as cc
 
     folder, pattern, bound, at_rest = COLLAPSE_FAMILIES[args.case]
-    if getattr(args, "resolution", "coarse") == "paper":
-        pattern = pattern.replace("_coarse", "")
-    known = sorted(p for p in config_path(folder).glob(pattern) if "_coarse" in pattern or "_coarse" not in p.stem)
-    paths = known
-    if args.cases:
-        wanted = set(args.cases)
-        paths = [p for p in known if p.stem in wanted or p.stem.split("_", 1)[1] in wanted]
-        if not paths:
-            raise FileNotFoundError(f"no collapse case among {sorted(args.cases)}; known: "
-                                    f"{', '.join(p.stem for p in known)}")
+    paths = _case_paths(folder, pattern, args)
     base = Path(args.out) if args.out else Path("output/validate") / args.case.replace("-", "_")
     results = []
     print(cc.HEADER)
@@ -105,4 +113,33 @@ def validate_column_collapse(args) -> int:
               "deposit creep at the speed shown (README, column collapse)")
     print(f"acceptance (run-out within {100 * bound:.0f} % of Lube for a <= 3, at rest, none escaped): "
           f"{'PASS' if ok else 'FAIL'}; {base / 'runout.csv'}, {base / 'runout.png'}")
+    return 0 if ok else 1
+
+
+def validate_stake_rows(args) -> int:
+    """Stake rows cases 1-3 of [A]: efficiency factor against Yellin et al. (2013)."""
+    from ..output import atomic_write_text
+    from . import obstacles as ob
+
+    paths = _case_paths("elastoplastic", "stake_rows_case*_coarse.yaml", args)
+    base = Path(args.out) if args.out else Path("output/validate/stake_rows")
+    results = []
+    print(ob.HEADER)
+    for path in paths:
+        scene = load_scene(path, args.set)
+        out = base / scene.name
+        times, frames = _frames(scene, out, args.reuse, args.quiet)
+        result = ob.evaluate_stake_rows(scene, times, frames)
+        results.append(result)
+        atomic_write_text(out / "leading_edge.csv", "t,leading_edge_m\n" + "".join(
+            f"{t:.4f},{e:.5f}\n" for t, e in zip(result.times, result.leading_edge)))
+        print(result.row(), flush=True)
+    print(f"areas: 1 = lower panel above the first row, 2 = first row to {ob.LEE} m past the last; efficiency = "
+          "(1 + 2)/total; reference: Yellin et al. (2013) experiment, [A] = Abdelrazek et al. SPH")
+    close = all(abs(r.error_points) <= ob.ACCEPTANCE_POINTS and r.crossed == 0 for r in results)
+    by_case = {r.case: r.efficiency for r in results}
+    lowest = set(by_case) != set(ob.EXPERIMENT) or min(by_case, key=by_case.get) == "case2"
+    ok = close and lowest
+    print(f"acceptance (within {100 * ob.ACCEPTANCE_POINTS:.0f} points, case 2 lowest, none crossed): "
+          f"{'PASS' if ok else 'FAIL'}; leading edge over time -> {base}/<case>/leading_edge.csv")
     return 0 if ok else 1

@@ -1,0 +1,133 @@
+"""Avalanche obstacles on a chute ([A] section 6, MODEL.md section 3): stake rows.
+
+Measures, from the particle positions of a run:
+- the distance ``s`` of every material particle along the chute bed (from the chute's origin,
+  on its centre line), and its height above the bed; particles below the bed have crossed it;
+- the leading edge: the largest s, over time;
+- the efficiency factor of the stake rows: the mass retained in area 1 (the lower panel
+  upstream of the first row, from the slope break on) plus area 2 (from the first row to
+  ``LEE`` past the last one: among the rows and in their lee), over the total mass.
+  Yellin et al. (2013) measured 76 / 48 / 80 % for cases 1 / 2 / 3.
+
+Units: m, kg, s.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Dict, List, Sequence
+
+import numpy as np
+
+from ..config import ChuteObstacle, PostRowsObstacle, Scene
+from ..scene.geometry import local_axes, to_local
+
+LEE = 0.10  # [m] past the last row that still counts as retained (area 2; our choice)
+EXPERIMENT = {"case1": 0.76, "case2": 0.48, "case3": 0.80}  # Yellin et al. (2013), via [A]
+SPH_IN_PAPER = {"case1": 0.72, "case2": 0.43, "case3": 0.76}  # [A]'s own SPH
+ACCEPTANCE_POINTS = 0.10  # within 10 points of the experiment
+
+
+def obstacle_of(scene: Scene, kind: type):
+    found = [o for o in scene.obstacles if isinstance(o, kind)]
+    if not found:
+        raise ValueError(f"{scene.name}: no {kind.__name__} among the obstacles")
+    return found[0]
+
+
+def along_chute(chute: ChuteObstacle, points: np.ndarray):
+    """(s, height above the bed) of ``points``: each point is referred to the segment whose
+    span along the slope holds it (the last one past the end)  [m]."""
+    dim = points.shape[1]
+    origin = np.zeros(dim) if chute.origin is None else np.asarray(chute.origin, float)
+    s = np.full(len(points), np.nan)
+    height = np.full(len(points), np.nan)
+    start = 0.0
+    for k, seg in enumerate(chute.segments):
+        local = to_local(points, origin, seg.slope_deg)
+        last = k == len(chute.segments) - 1
+        on = np.isnan(s) & ((local[:, 0] < seg.length) | last)
+        s[on] = start + local[on, 0]
+        height[on] = local[on, -1]
+        origin = origin + seg.length * local_axes(seg.slope_deg, dim)[:, 0]
+        start += seg.length
+    return s, height
+
+
+def post_rows_span(scene: Scene):
+    """(s of the first row's front, s of the last row's rear) along the chute  [m]."""
+    chute = obstacle_of(scene, ChuteObstacle)
+    posts = obstacle_of(scene, PostRowsObstacle)
+    origin = np.asarray(posts.origin if posts.origin is not None else np.zeros(scene.dimension), float)
+    s0, _ = along_chute(chute, origin[None, :])
+    return float(s0[0]), float(s0[0] + (posts.rows - 1) * posts.row_spacing + posts.post_size)
+
+
+@dataclass
+class StakeRowResult:
+    name: str
+    case: str
+    efficiency: float  # (area 1 + area 2)/total
+    area1: float  # mass fractions
+    area2: float
+    passed: float  # beyond area 2
+    upper_panel: float  # still on the first (steep) panel
+    crossed: int  # material particles below the bed
+    front_stop_time: float  # [s] after which the leading edge moves slower than 0.1 m/s (nan: still moving)
+    times: List[float] = field(default_factory=list)
+    leading_edge: List[float] = field(default_factory=list)  # [m] along the chute
+
+    @property
+    def reference(self) -> float:
+        return EXPERIMENT.get(self.case, float("nan"))
+
+    @property
+    def error_points(self) -> float:
+        return self.efficiency - self.reference
+
+    def row(self) -> str:
+        paper = SPH_IN_PAPER.get(self.case, float("nan"))
+        return (f"{self.name:28s} {100 * self.efficiency:6.1f} {100 * self.reference:6.1f} {100 * paper:6.1f} "
+                f"{100 * self.error_points:+7.1f}  {100 * self.area1:5.1f} {100 * self.area2:5.1f} "
+                f"{100 * self.passed:5.1f} {100 * self.upper_panel:5.1f}  {self.leading_edge[-1]:6.3f} "
+                f"{self.front_stop_time:6.2f} {self.times[-1]:6.2f} {self.crossed:4d}")
+
+
+HEADER = (f"{'case':28s} {'eff%':>6s} {'exp%':>6s} {'[A]%':>6s} {'err pt':>7s}  {'a1%':>5s} {'a2%':>5s} "
+          f"{'pass%':>5s} {'45deg%':>5s}  {'edge m':>6s} {'stop s':>6s} {'end s':>6s} {'xed':>4s}")
+
+
+def case_of(name: str) -> str:
+    for case in EXPERIMENT:
+        if case in name:
+            return case
+    return name
+
+
+def evaluate_stake_rows(scene: Scene, times: Sequence[float], frames: Sequence[Dict[str, np.ndarray]]
+                        ) -> StakeRowResult:
+    chute = obstacle_of(scene, ChuteObstacle)
+    first_row, last_row = post_rows_span(scene)
+    break_s = chute.segments[0].length
+    edges = []
+    for f in frames:
+        n = int(np.sum(f["is_wall"] == 0))
+        s, _ = along_chute(chute, f["position"][:n])
+        edges.append(float(np.nanmax(s)))
+    final = frames[-1]
+    n = int(np.sum(final["is_wall"] == 0))
+    s, height = along_chute(chute, final["position"][:n])
+    mass = final["mass"][:n]
+    total = mass.sum()
+    area1 = mass[(s >= break_s) & (s < first_row)].sum() / total
+    area2 = mass[(s >= first_row) & (s < last_row + LEE)].sum() / total
+    passed = mass[s >= last_row + LEE].sum() / total
+    upper = mass[s < break_s].sum() / total
+    stop = float("nan")
+    t = np.asarray(times, float)
+    e = np.asarray(edges)
+    moving = [k for k in range(1, len(t)) if (e[k] - e[k - 1]) > 0.1 * (t[k] - t[k - 1])]  # 0.1 m/s
+    if moving and moving[-1] < len(t) - 1:
+        stop = float(t[moving[-1]])
+    return StakeRowResult(name=scene.name, case=case_of(scene.name), efficiency=area1 + area2, area1=area1,
+                          area2=area2, passed=passed, upper_panel=upper, crossed=int(np.sum(height < 0.0)),
+                          front_stop_time=stop, times=list(map(float, times)), leading_edge=edges)
