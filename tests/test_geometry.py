@@ -209,6 +209,9 @@ def test_efficiency_factor_counts_the_areas():
     assert result.crossed == 0
     below = dict(frame, position=pos - np.array([0.0, 0.0, 0.01]))
     assert ob.evaluate_stake_rows(scene, [0.0], [below]).crossed > 0
+    off = dict(below, position=below["position"] + np.array([0.0, 0.3, 0.0]))  # beside the 0.4 m chute
+    assert ob.evaluate_stake_rows(scene, [0.0], [off]).crossed == 0
+    assert ob.evaluate_stake_rows(scene, [0.0], [off]).fell_off == n
 
 
 def test_material_inside_an_obstacle_is_refused():

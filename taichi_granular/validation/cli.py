@@ -54,6 +54,16 @@ def _case_paths(folder: str, pattern: str, args):
     return paths
 
 
+def _each_case(paths, base: Path, args):
+    """(scene, its output folder under ``base``, frame times, frames) of each scene file, run
+    first unless ``--reuse``."""
+    for path in paths:
+        scene = load_scene(path, args.set)
+        out = base / scene.name
+        times, frames = _frames(scene, out, args.reuse, args.quiet)
+        yield scene, out, times, frames
+
+
 # (configs folder, scene files, acceptance bound on the run-out error, read the run-out at rest)
 COLLAPSE_FAMILIES = {
     "column-collapse": ("mu_i", "collapse_a*.yaml", 0.15, False),  # 2D mu(I), Table 3 of [M]
@@ -77,10 +87,7 @@ def validate_column_collapse(args) -> int:
     base = Path(args.out) if args.out else Path("output/validate") / args.case.replace("-", "_")
     results = []
     print(cc.HEADER)
-    for path in paths:
-        scene = load_scene(path, args.set)
-        out = base / scene.name
-        times, frames = _frames(scene, out, args.reuse, args.quiet)
+    for scene, out, times, frames in _each_case(paths, base, args):
         with open(out / "diagnostics.csv") as fh:
             diagnostics = [{k: float(v) for k, v in row.items()} for row in csv.DictReader(fh)]
         result = cc.evaluate(scene, times, frames, diagnostics, read_at_end=at_rest)
@@ -125,10 +132,7 @@ def validate_stake_rows(args) -> int:
     base = Path(args.out) if args.out else Path("output/validate/stake_rows")
     results = []
     print(ob.HEADER)
-    for path in paths:
-        scene = load_scene(path, args.set)
-        out = base / scene.name
-        times, frames = _frames(scene, out, args.reuse, args.quiet)
+    for scene, out, times, frames in _each_case(paths, base, args):
         result = ob.evaluate_stake_rows(scene, times, frames)
         results.append(result)
         atomic_write_text(out / "leading_edge.csv", "t,leading_edge_m\n" + "".join(

@@ -71,7 +71,8 @@ class StakeRowResult:
     area2: float
     passed: float  # beyond area 2
     upper_panel: float  # still on the first (steep) panel
-    crossed: int  # material particles below the bed
+    crossed: int  # material particles below the bed, within its width
+    fell_off: int  # material particles that left the chute over its side (3D chutes without side walls)
     front_stop_time: float  # [s] after which the leading edge moves slower than 0.1 m/s (nan: still moving)
     times: List[float] = field(default_factory=list)
     leading_edge: List[float] = field(default_factory=list)  # [m] along the chute
@@ -89,11 +90,11 @@ class StakeRowResult:
         return (f"{self.name:28s} {100 * self.efficiency:6.1f} {100 * self.reference:6.1f} {100 * paper:6.1f} "
                 f"{100 * self.error_points:+7.1f}  {100 * self.area1:5.1f} {100 * self.area2:5.1f} "
                 f"{100 * self.passed:5.1f} {100 * self.upper_panel:5.1f}  {self.leading_edge[-1]:6.3f} "
-                f"{self.front_stop_time:6.2f} {self.times[-1]:6.2f} {self.crossed:4d}")
+                f"{self.front_stop_time:6.2f} {self.times[-1]:6.2f} {self.crossed:4d} {self.fell_off:4d}")
 
 
 HEADER = (f"{'case':28s} {'eff%':>6s} {'exp%':>6s} {'[A]%':>6s} {'err pt':>7s}  {'a1%':>5s} {'a2%':>5s} "
-          f"{'pass%':>5s} {'45deg%':>5s}  {'edge m':>6s} {'stop s':>6s} {'end s':>6s} {'xed':>4s}")
+          f"{'pass%':>5s} {'45deg%':>5s}  {'edge m':>6s} {'stop s':>6s} {'end s':>6s} {'xed':>4s} {'off':>4s}")
 
 
 def case_of(name: str) -> str:
@@ -116,6 +117,7 @@ def evaluate_stake_rows(scene: Scene, times: Sequence[float], frames: Sequence[D
     final = frames[-1]
     n = int(np.sum(final["is_wall"] == 0))
     s, height = along_chute(chute, final["position"][:n])
+    beside = np.abs(final["position"][:n, 1]) > 0.5 * chute.width if scene.dimension == 3 else np.zeros(n, bool)
     mass = final["mass"][:n]
     total = mass.sum()
     area1 = mass[(s >= break_s) & (s < first_row)].sum() / total
@@ -129,5 +131,6 @@ def evaluate_stake_rows(scene: Scene, times: Sequence[float], frames: Sequence[D
     if moving and moving[-1] < len(t) - 1:
         stop = float(t[moving[-1]])
     return StakeRowResult(name=scene.name, case=case_of(scene.name), efficiency=area1 + area2, area1=area1,
-                          area2=area2, passed=passed, upper_panel=upper, crossed=int(np.sum(height < 0.0)),
+                          area2=area2, passed=passed, upper_panel=upper, crossed=int(np.sum((height < 0.0) & ~beside)),
+                          fell_off=int(np.sum(beside)),
                           front_stop_time=stop, times=list(map(float, times)), leading_edge=edges)
