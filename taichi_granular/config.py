@@ -41,6 +41,11 @@ def _key(doc: str, default: Any = dataclasses.MISSING, unit: str = "") -> Any:
     return field(default=default, metadata=meta)
 
 
+def _check_friction_angle(path: str, value: Optional[float]) -> None:
+    if value is not None and not 0.0 <= value < 90.0:
+        raise ConfigError(path, f"friction angle {value} must lie in [0, 90) degrees (not radians)")
+
+
 def _positive(path: str, value: float, what: str = "must be > 0") -> None:
     if not (value > 0 and math.isfinite(value)):
         raise ConfigError(path, f"{what}, got {value!r}")
@@ -58,6 +63,8 @@ class Domain:
     lower: Tuple[float, ...] = _key("lower corner of the box", unit="m")
     upper: Tuple[float, ...] = _key("upper corner of the box", unit="m")
     periodic: Tuple[str, ...] = _key("periodic axes, e.g. [x]", ())
+    outflow: bool = _key("open faces: material leaving the box is taken out of the flow and counted "
+                         "(physics/outflow.py) instead of stopping the run", False)
 
     def check(self, path: str, dim: int) -> None:
         _check_vector(f"{path}.lower", self.lower, dim)
@@ -297,6 +304,10 @@ class Wall:
     ghost_stress: Literal["extrapolated", "mirror"] = _key(
         "mirror: sigma_j = sigma_i as in [M]; extrapolated: the traction on planes parallel to the "
         "wall grows by rho_i g (d_i + d_j) (the static momentum balance across the wall)", "extrapolated")
+    friction_angle_deg: Optional[float] = _key(
+        "dynamic boundaries: Coulomb friction angle delta between the material and this boundary "
+        "(|wall shear force| <= tan(delta) |wall normal force|); default none: the wall resists shear "
+        "only through the stress it carries (physics/walls/dynamic.py)", None, "deg")
 
     def check(self, path: str, dim: int) -> None:
         _check_vector(f"{path}.normal", self.normal, dim)
@@ -309,6 +320,10 @@ class Wall:
                 _check_vector(f"{path}.{key}", getattr(self, key), dim)
         if not 1.0 <= self.max_velocity_factor <= 100.0:
             raise ConfigError(f"{path}.max_velocity_factor", "beta_max must lie in [1, 100] [M36]")
+        if self.friction_angle_deg is not None and self.type != "dynamic":
+            raise ConfigError(f"{path}.friction_angle_deg", "only dynamic walls take a friction angle "
+                                                            "(ghost walls are no-slip)")
+        _check_friction_angle(f"{path}.friction_angle_deg", self.friction_angle_deg)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -322,6 +337,10 @@ class _Obstacle:
     origin: Optional[Tuple[float, ...]] = _key("the local frame's origin (default the global origin)", None, "m")
     tilt_deg: float = _key("slope of the local x axis below the horizontal (about y; +: x' descends)", 0.0,
                            "deg")
+    friction_angle_deg: Optional[float] = _key(
+        "dynamic boundaries: Coulomb friction angle delta between the material and this boundary "
+        "(|wall shear force| <= tan(delta) |wall normal force|); default none: the wall resists shear "
+        "only through the stress it carries (physics/walls/dynamic.py)", None, "deg")
     dimensions = (3,)
 
     def check(self, path: str, dim: int) -> None:
@@ -332,6 +351,7 @@ class _Obstacle:
             _check_vector(f"{path}.origin", self.origin, dim)
         if not -90.0 < self.tilt_deg < 90.0:
             raise ConfigError(f"{path}.tilt_deg", f"must lie in (-90, 90) deg, got {self.tilt_deg}")
+        _check_friction_angle(f"{path}.friction_angle_deg", self.friction_angle_deg)
 
     def _positive_keys(self, path: str, *keys: str) -> None:
         for key in keys:
@@ -488,6 +508,26 @@ class ArtificialViscosity:
 
 
 @dataclass(frozen=True, kw_only=True)
+class ArtificialStress:
+    """Artificial stress against the tensile instability (Gray, Monaghan & Swift 2001), for
+    models with a stress tensor; epsilon = 0 removes the stage altogether."""
+
+    epsilon: float = _key("epsilon of R_a = -epsilon sigma_a/rho^2 for tensile principal stresses (0 = off; "
+                          "Gray et al. use 0.3)", 0.0, "-")
+    exponent: float = _key("n of the weight (W(r)/W(dp))^n", 4.0, "-")
+
+    def check(self, path: str) -> None:
+        if not 0.0 <= self.epsilon <= 1.0:
+            raise ConfigError(f"{path}.epsilon", f"must lie in [0, 1], got {self.epsilon}")
+        if not 1.0 <= self.exponent <= 8.0:
+            raise ConfigError(f"{path}.exponent", f"must lie in [1, 8], got {self.exponent}")
+
+    @property
+    def enabled(self) -> bool:
+        return self.epsilon > 0.0
+
+
+@dataclass(frozen=True, kw_only=True)
 class ParticleShifting:
     """Particle shifting (after Lind et al. 2012): each step a particle moves by
     dr_i = -coefficient h c_i dt grad C_i down its concentration gradient, its velocity is
@@ -536,6 +576,8 @@ class Numerics:
         "models with a stress history only)", 0.0, "-")
     particle_shifting: ParticleShifting = _key("particle shifting against particle-scale disorder",
                                                ParticleShifting())
+    artificial_stress: ArtificialStress = _key("artificial stress against the tensile instability (models with "
+                                               "a stress tensor)", ArtificialStress())
     min_time_step: float = _key("the run stops if the stable time step falls below this", 1e-9, "s")
 
     def check(self, path: str) -> None:
@@ -547,6 +589,7 @@ class Numerics:
         _positive(f"{path}.min_time_step", self.min_time_step)
         self.artificial_viscosity.check(f"{path}.artificial_viscosity")
         self.particle_shifting.check(f"{path}.particle_shifting")
+        self.artificial_stress.check(f"{path}.artificial_stress")
         for key in ("density_diffusion", "stress_diffusion"):
             if not 0.0 <= getattr(self, key) <= 1.0:
                 raise ConfigError(f"{path}.{key}", f"must lie in [0, 1], got {getattr(self, key)}")
@@ -674,6 +717,9 @@ class Scene:
             if self.material.model == "mu_i":
                 raise ConfigError(f"obstacles[{k}]", "the mu(I) model of [M] uses ghost walls [M34]-[M36]; "
                                                      "obstacles are dynamic boundary particles")
+        if self.material.model == "mu_i" and self.numerics.artificial_stress.enabled:
+            raise ConfigError("numerics.artificial_stress.epsilon", "the tensile instability correction needs a "
+                                                                    "stress tensor model (elastoplastic); set it to 0")
         if self.material.model == "mu_i" and self.numerics.stress_diffusion > 0.0:
             raise ConfigError("numerics.stress_diffusion", "mu(I) integrates no stress (its stress is algebraic); "
                                                            "set it to 0")

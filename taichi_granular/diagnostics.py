@@ -15,10 +15,13 @@ GUARD_CODES = {
 
 @ti.data_oriented
 class Diagnostics:
-    """Kinetic energy [J (per m in 2D)], max speed [m/s], max |density error| [-]."""
+    """Kinetic energy [J (per m in 2D)], max speed [m/s], max |density error| [-], and with open
+    faces the number of particles that have left the domain."""
 
     def __init__(self, state, model):
         self.state, self.model = state, model
+        self.outflow = state.has("outflow")
+        self.outflow_count = ti.field(ti.i32, shape=())
         self.kinetic_energy = ti.field(float, shape=())
         self.max_speed = ti.field(float, shape=())
         self.max_density_error = ti.field(float, shape=())
@@ -28,8 +31,13 @@ class Diagnostics:
         self.kinetic_energy[None] = 0.0
         self.max_speed[None] = 0.0
         self.max_density_error[None] = 0.0
+        self.outflow_count[None] = 0
         ti.loop_config(serialize=runtime.serial_loops)
         for i in range(self.state.n_material):
+            if ti.static(self.outflow):
+                if self.state.outflow[i] > 0.0:
+                    self.outflow_count[None] += 1
+                    continue
             v = self.state.velocity[i]
             self.kinetic_energy[None] += 0.5 * self.state.mass[i] * v.norm_sqr()
             ti.atomic_max(self.max_speed[None], v.norm())
@@ -37,8 +45,11 @@ class Diagnostics:
 
     def measure(self) -> dict:
         self._measure()
-        return {"kinetic_energy": float(self.kinetic_energy[None]), "max_speed": float(self.max_speed[None]),
-                "max_density_error": float(self.max_density_error[None])}
+        result = {"kinetic_energy": float(self.kinetic_energy[None]), "max_speed": float(self.max_speed[None]),
+                  "max_density_error": float(self.max_density_error[None])}
+        if self.outflow:
+            result["outflow"] = int(self.outflow_count[None])
+        return result
 
 
 @ti.data_oriented
@@ -51,6 +62,7 @@ class Guard:
         self.lower = tuple(domain.lower)
         self.upper = tuple(domain.upper)
         self.periodic = domain.periodic_mask
+        self.outflow = state.has("outflow")  # particles that left by an open face are not checked
         self.first_bad = ti.field(ti.i32, shape=())
         self.code = ti.field(ti.i32, shape=state.n_material)
 
@@ -65,6 +77,10 @@ class Guard:
         ti.loop_config(serialize=runtime.serial_loops)
         for i in range(n):
             code = 0
+            if ti.static(self.outflow):
+                if self.state.outflow[i] > 0.0:
+                    self.code[i] = 0
+                    continue
             x = self.state.position[i]
             v = self.state.velocity[i]
             for a in ti.static(range(self.dim)):

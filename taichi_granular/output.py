@@ -23,6 +23,8 @@ import numpy as np
 from .config import Scene, dump_scene
 
 DIAGNOSTIC_COLUMNS = ("t", "step", "dt", "kinetic_energy", "max_speed", "max_density_error")
+OPTIONAL_DIAGNOSTIC_COLUMNS = ("outflow",)  # particles that left by an open face (domain.outflow)
+INTEGER_DIAGNOSTIC_COLUMNS = ("step", "outflow")
 # Fields written to VTU for every particle (walls included), if the state has them.
 VTU_FIELDS = ("velocity", "pressure", "density", "mass")
 
@@ -104,7 +106,8 @@ class RunOutput:
             self.frames = [(t, p.name) for t, p in read_series(self.dir) if t <= time * (1 + 1e-12)]
         if (self.dir / "diagnostics.csv").exists():
             with open(self.dir / "diagnostics.csv") as fh:
-                rows = [{k: (int(v) if k == "step" else float(v)) for k, v in r.items()} for r in csv.DictReader(fh)]
+                rows = [{k: (int(v) if k in INTEGER_DIAGNOSTIC_COLUMNS else float(v)) for k, v in r.items()}
+                        for r in csv.DictReader(fh)]
             self.diagnostics = [r for r in rows if r["t"] <= time * (1 + 1e-12)]
 
     def write_checkpoint(self, arrays: Dict[str, np.ndarray], counters: Dict[str, float]) -> None:
@@ -131,7 +134,8 @@ class RunOutput:
     def write_diagnostics(self, row: dict) -> None:
         self.diagnostics.append(row)
         buf = io.StringIO()
-        writer = csv.DictWriter(buf, fieldnames=DIAGNOSTIC_COLUMNS, extrasaction="ignore")
+        columns = DIAGNOSTIC_COLUMNS + tuple(c for c in OPTIONAL_DIAGNOSTIC_COLUMNS if c in row)
+        writer = csv.DictWriter(buf, fieldnames=columns, extrasaction="ignore")
         writer.writeheader()
         for r in self.diagnostics:
             writer.writerow({k: (f"{v:.9g}" if isinstance(v, float) else v) for k, v in r.items()})

@@ -8,12 +8,15 @@ kernel only when it first runs, so stages that are not in the list are never com
 from typing import List
 
 import numpy as np
+import taichi as ti
 
 from . import runtime
 from .neighbors import NeighborGrid, NeighbourSearch
 from .integrators import INTEGRATORS, StableTimeStep
+from .physics.artificial_stress import ArtificialStress
 from .physics.artificial_viscosity import ArtificialViscosity
 from .physics.gradient_correction import GRADIENTS
+from .physics.outflow import Outflow
 from .physics.rheology import MODELS
 from .physics.shifting import FreeSurface, ParticleShifting
 from .physics.stage import Context
@@ -44,6 +47,9 @@ def rate_stage_classes(scene: Scene, model) -> List[type]:
     classes += model.stage_classes(scene)
     if scene.numerics.artificial_viscosity.enabled:
         classes.append(ArtificialViscosity)
+    if scene.numerics.artificial_stress.enabled:
+        classes.append(ArtificialStress)
+    classes += getattr(walls_cls, "force_stage_classes", lambda s: [])(scene)  # after every other force
     if scene.numerics.particle_shifting.enabled:
         classes.append(ParticleShifting)
     return classes
@@ -62,7 +68,8 @@ class Scheme:
         integrator_cls = INTEGRATORS[scene.numerics.integrator]
         gradient_cls = GRADIENTS[scene.numerics.gradient_correction]
         specs = merge_specs([model.fields, walls_cls.fields, integrator_cls.fields, gradient_cls.fields]
-                            + [cls.fields for cls in rate_classes + model.update_stage_classes()])
+                            + [cls.fields for cls in rate_classes + model.update_stage_classes()]
+                            + ([Outflow.fields] if scene.domain.outflow else []))
         ini = self.initial
         runtime.choose_loops(ini.n_total)
         self.state = ParticleState(scene.dimension, ini.n_material, ini.n_wall, specs)
@@ -75,13 +82,16 @@ class Scheme:
         self.grid = NeighborGrid(self.state.position, scene.domain.lower, scene.domain.upper,
                                  scene.domain.periodic_mask, self.smoothing.support)
         self.walls = walls_cls(self.state, scene.gravity_vector)
+        self.dt = ti.field(float, shape=())
         ctx = Context(state=self.state, grid=self.grid, smoothing=self.smoothing, walls=self.walls,
-                      model=model, scene=scene)
+                      model=model, scene=scene, time_step=self.dt)
         ctx.gradient = self.gradient = gradient_cls(ctx)
         self.rate_stages = [cls(ctx) for cls in rate_classes]
         self.integrator = integrator_cls(ctx)
         # after every update: walls act on the new positions, the model on the new state
-        self.position_stages = [cls(ctx) for cls in walls_cls.position_stage_classes() + model.update_stage_classes()]
+        outflow = [Outflow] if scene.domain.outflow else []
+        self.position_stages = [cls(ctx) for cls in outflow + walls_cls.position_stage_classes()
+                                + model.update_stage_classes()]
         self.time_step = StableTimeStep(ctx)
 
     # ---- stepping -----------------------------------------------------------------------------
@@ -100,6 +110,7 @@ class Scheme:
             self.profiler(stage)
 
     def step(self, dt: float) -> None:
+        self.dt[None] = dt  # stages that act over one step (wall friction) read it
         self.integrator.step(dt, self)
 
     def stable_time_step(self) -> float:

@@ -242,3 +242,41 @@ def test_small_3d_collapse_runs_to_rest_near_the_lube_runout():
     assert result.time_to_rest is not None and result.time_to_rest <= 0.6, result.row()
     assert abs(result.error) < 0.25, result.row()
     assert result.fronts[-1].height < 0.9 * result.fronts[0].height  # it did collapse
+
+
+def test_artificial_stress_opposes_only_the_tensile_principal_stress():
+    """Gray, Monaghan & Swift (2001): R = -epsilon Q diag(max(sigma_a, 0)) Q^T / rho^2. A
+    stress with principal values +2 kPa (tension) along a direction 30 deg from x and -5 kPa
+    across it gives R = -0.3 * 2 kPa / rho^2 along that direction only; a compressive stress
+    gives R = 0; and the stage is in the step only when epsilon > 0."""
+    base = {
+        "name": "tension", "dimension": 2,
+        "domain": {"lower": [0.0, 0.0], "upper": [0.1, 0.1]},
+        "material": {**SAND, "cohesion": 1000.0},
+        "particles": [{"lower": [0.03, 0.03], "upper": [0.06, 0.06], "initial_stress": "zero"}],
+        "numerics": numerics(0.005, artificial_stress={"epsilon": 0.3}),
+        "run": {"end_time": 0.01, "output_interval": 0.01},
+    }
+    sim = Simulation(scene_from_dict(base))
+    stage = next(s for s in sim.scheme.rate_stages if s.name == "artificial_stress")
+    n = sim.state.n_material
+    angle = math.radians(30.0)
+    q = np.array([[math.cos(angle), -math.sin(angle)], [math.sin(angle), math.cos(angle)]])
+    sigma = q @ np.diag([2000.0, -5000.0]) @ q.T
+    p = -np.trace(sigma) / 2.0  # 2D: in-plane mean; s the in-plane deviator
+    s = sigma + p * np.eye(2)
+    pressure = sim.state.pressure.to_numpy()
+    pressure[:n] = p
+    sim.state.pressure.from_numpy(pressure)
+    sim.state.deviatoric_stress.from_numpy(np.tile(s, (n, 1, 1)))
+    stage.tensor()
+    rho = sim.state.density.to_numpy()[0]
+    expected = -0.3 * 2000.0 / rho**2 * np.outer(q[:, 0], q[:, 0])
+    assert np.allclose(sim.state.artificial_stress.to_numpy()[0], expected, rtol=1e-9, atol=1e-15)
+    pressure[:n] = 3000.0
+    sim.state.pressure.from_numpy(pressure)
+    sim.state.deviatoric_stress.from_numpy(np.zeros((n, 2, 2)))
+    stage.tensor()
+    assert np.all(sim.state.artificial_stress.to_numpy() == 0.0)
+    off = {**base, "numerics": numerics(0.005)}
+    assert "artificial_stress" not in [s.name for s in Simulation(scene_from_dict(off)).scheme.rate_stages]

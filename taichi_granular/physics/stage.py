@@ -20,6 +20,7 @@ class Context:
     model: Any
     scene: Any
     gradient: Any = None  # PlainGradient or CorrectedGradient: grad W as pair loops see it
+    time_step: Any = None  # 0-d field: the dt of the step being taken [s] (set by Scheme.step)
 
 
 class Stage:

@@ -114,10 +114,13 @@ class Renderer:
 
     def radii(self, arrays: Dict[str, np.ndarray], n_material: int) -> np.ndarray:
         """True particle size: disc of area m/rho (2D), sphere of volume m/rho (3D); wall
-        particles get the initial spacing dp as their area/volume."""
+        particles get the initial spacing dp as their area/volume; particles that left by an open
+        face get none."""
         n = len(arrays["position"])
         volume = np.full(n, self.scene.numerics.particle_spacing ** self.dim)
         volume[:n_material] = arrays["mass"][:n_material] / arrays["density"][:n_material]
+        if "outflow" in arrays:  # taken out of the flow (physics/outflow.py): not drawn
+            volume[:n_material][np.asarray(arrays["outflow"]) > 0] = 0.0
         if self.dim == 2:
             return np.sqrt(volume / math.pi)
         return np.cbrt(3.0 * volume / (4.0 * math.pi))

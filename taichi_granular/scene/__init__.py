@@ -158,6 +158,7 @@ def build_initial(scene: Scene, model) -> InitialParticles:
     n_mat = len(x_mat)
 
     wall_pos, wall_depth, wall_normal, wall_beta, wall_extrap, wall_of = [], [], [], [], [], []
+    wall_mu = []  # tan(delta) of each boundary particle's source (-1: no Coulomb friction)
     layers = int(math.ceil(2.0 * scene.numerics.smoothing_length / dp - 1e-9))
     for w, wall in enumerate(scene.walls):
         lower = wall.lower if wall.lower is not None else scene.domain.lower
@@ -178,6 +179,7 @@ def build_initial(scene: Scene, model) -> InitialParticles:
         wall_beta.append(np.full(len(pts), wall.max_velocity_factor))
         wall_extrap.append(np.full(len(pts), 1.0 if wall.ghost_stress == "extrapolated" else 0.0))
         wall_of.append(np.full(len(pts), w))
+        wall_mu.append(np.full(len(pts), _friction_coefficient(wall)))
     for k, obstacle in enumerate(scene.obstacles):
         pts = obstacle_particles(obstacle, dim, dp, layers)
         if len(pts) == 0:
@@ -188,12 +190,14 @@ def build_initial(scene: Scene, model) -> InitialParticles:
         wall_beta.append(np.ones(len(pts)))
         wall_extrap.append(np.zeros(len(pts)))
         wall_of.append(np.full(len(pts), len(scene.walls) + k))
+        wall_mu.append(np.full(len(pts), _friction_coefficient(obstacle)))
     if wall_pos:
         x_wall, keep = _unique_points(np.concatenate(wall_pos), dp)
         wall_fields = {"wall_distance": np.concatenate(wall_depth)[keep],
                        "wall_normal": np.concatenate(wall_normal)[keep],
                        "wall_beta_max": np.concatenate(wall_beta)[keep],
-                       "wall_extrapolation": np.concatenate(wall_extrap)[keep]}
+                       "wall_extrapolation": np.concatenate(wall_extrap)[keep],
+                       "wall_friction": np.concatenate(wall_mu)[keep]}
         wall_of_arr = np.concatenate(wall_of)[keep]
         _check_inside_domain(x_wall, scene, lambda i: _wall_key(scene, wall_of_arr[i]),
                              "wall particles reach outside the domain; enlarge domain")
@@ -212,6 +216,12 @@ def build_initial(scene: Scene, model) -> InitialParticles:
     return InitialParticles(position=position, velocity=velocity, mass=mass, density=density,
                             pressure=pressure, n_material=n_mat, wall_fields=wall_fields,
                             block_of=block_of, wall_of=wall_of_arr)
+
+
+def _friction_coefficient(source) -> float:
+    """tan(delta) of a wall or obstacle; -1 when it has no Coulomb friction angle (a rough wall,
+    physics/walls/dynamic.py)."""
+    return -1.0 if source.friction_angle_deg is None else math.tan(math.radians(source.friction_angle_deg))
 
 
 def _unique_points(points: np.ndarray, spacing: float):

@@ -3,7 +3,8 @@
 Measures, from the particle positions of a run:
 - the distance ``s`` of every material particle along the chute bed (from the chute's origin,
   on its centre line), and its height above the bed; particles below the bed have crossed it;
-- the leading edge: the largest s, over time;
+- the leading edge: the largest s, over time, among particles still on the chute (within its
+  width, not taken out at an open face of the domain);
 - the efficiency factor of the stake rows: the mass retained in area 1 (the lower panel
   upstream of the first row, from the slope break on) plus area 2 (from the first row to
   ``LEE`` past the last one: among the rows and in their lee), over the total mass.
@@ -72,7 +73,8 @@ class StakeRowResult:
     passed: float  # beyond area 2
     upper_panel: float  # still on the first (steep) panel
     crossed: int  # material particles below the bed, within its width
-    fell_off: int  # material particles that left the chute over its side (3D chutes without side walls)
+    fell_off: int  # material particles that left the chute over its side (3D chutes without side walls);
+    # those that ran off its end count as passed
     front_stop_time: float  # [s] after which the leading edge moves slower than 0.1 m/s (nan: still moving)
     times: List[float] = field(default_factory=list)
     leading_edge: List[float] = field(default_factory=list)  # [m] along the chute
@@ -97,6 +99,13 @@ HEADER = (f"{'case':28s} {'eff%':>6s} {'exp%':>6s} {'[A]%':>6s} {'err pt':>7s}  
           f"{'pass%':>5s} {'45deg%':>5s}  {'edge m':>6s} {'stop s':>6s} {'end s':>6s} {'xed':>4s} {'off':>4s}")
 
 
+def _left_domain(frame: Dict[str, np.ndarray], n: int) -> np.ndarray:
+    """Material particles taken out of the flow at an open face (domain.outflow)."""
+    if "outflow" not in frame:
+        return np.zeros(n, bool)
+    return np.asarray(frame["outflow"][:n]) > 0
+
+
 def case_of(name: str) -> str:
     for case in EXPERIMENT:
         if case in name:
@@ -112,8 +121,11 @@ def evaluate_stake_rows(scene: Scene, times: Sequence[float], frames: Sequence[D
     edges = []
     for f in frames:
         n = int(np.sum(f["is_wall"] == 0))
-        s, _ = along_chute(chute, f["position"][:n])
-        edges.append(float(np.nanmax(s)))
+        on_chute = ~_left_domain(f, n)
+        if scene.dimension == 3:
+            on_chute &= np.abs(f["position"][:n, 1]) <= 0.5 * chute.width
+        s, _ = along_chute(chute, f["position"][:n][on_chute])
+        edges.append(float(np.nanmax(s)) if len(s) else float("nan"))
     final = frames[-1]
     n = int(np.sum(final["is_wall"] == 0))
     s, height = along_chute(chute, final["position"][:n])
