@@ -85,6 +85,9 @@ def cmd_validate(args) -> int:
     if args.case == "stake-rows":
         from .validation.cli import validate_stake_rows
         return validate_stake_rows(args)
+    if args.case == "obstacle-flow":
+        from .validation.cli import validate_obstacle_flow
+        return validate_obstacle_flow(args)
     raise AssertionError(args.case)
 
 
@@ -138,9 +141,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=cmd_render)
 
     p = sub.add_parser("validate", help="run a validation case and print its errors")
-    p.add_argument("case", choices=["inclined-plane", "column-collapse", "column-collapse-3d", "stake-rows"])
+    p.add_argument("case", choices=["inclined-plane", "column-collapse", "column-collapse-3d", "stake-rows",
+                                       "obstacle-flow"])
     p.add_argument("--resolution", choices=["coarse", "paper"], default="coarse",
-                   help="column-collapse-3d, stake-rows: the coarse CPU scenes or the paper's resolution (GPU)")
+                   help="column-collapse-3d, stake-rows, obstacle-flow: the coarse CPU scenes or the paper's "
+                        "resolution (GPU)")
     p.add_argument("--cases", nargs="+", help="only these (e.g. a0_90 a2_75; case1 case3)")
     p.add_argument("--config", help="scene file (default: the bundled one)")
     p.add_argument("--out", help="output directory (default: output/validate/<case>)")

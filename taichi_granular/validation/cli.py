@@ -38,12 +38,14 @@ def validate_inclined_plane(args) -> int:
 
 
 def _case_paths(folder: str, pattern: str, args):
-    """The scene files of a validation family: ``pattern`` names the coarse CPU variants;
+    """The scene files of a validation family: ``pattern`` (or a list of them) names the coarse CPU variants;
     ``--resolution paper`` picks the paper-resolution files instead; ``--cases`` filters by
     stem or by the stem without its family prefix."""
+    patterns = [pattern] if isinstance(pattern, str) else list(pattern)
     if getattr(args, "resolution", "coarse") == "paper":
-        pattern = pattern.replace("_coarse", "")
-    known = sorted(p for p in config_path(folder).glob(pattern) if "_coarse" in pattern or "_coarse" not in p.stem)
+        patterns = [p.replace("_coarse", "") for p in patterns]
+    known = sorted(p for pat in patterns for p in config_path(folder).glob(pat)
+                   if "_coarse" in pat or "_coarse" not in p.stem)
     if not args.cases:
         return known
     wanted = set(args.cases)
@@ -146,4 +148,33 @@ def validate_stake_rows(args) -> int:
     ok = close and lowest
     print(f"acceptance (within {100 * ob.ACCEPTANCE_POINTS:.0f} points, case 2 lowest, none crossed): "
           f"{'PASS' if ok else 'FAIL'}; leading edge over time -> {base}/<case>/leading_edge.csv")
+    return 0 if ok else 1
+
+
+def validate_obstacle_flow(args) -> int:
+    """Cylinder (Cui & Gray 2013) and wedge (Tai et al. 2001) of [A]: bow shock, depth jump,
+    particle-free wake and protected zone."""
+    from ..output import atomic_write_text
+    from . import obstacle_flow as of
+
+    paths = _case_paths("elastoplastic", ["cylinder_coarse.yaml", "wedge_coarse.yaml"], args)
+    base = Path(args.out) if args.out else Path("output/validate/obstacle_flow")
+    print(of.HEADER)
+    ok = True
+    for scene, out, times, frames in _each_case(paths, base, args):
+        result = of.evaluate_obstacle_flow(scene, times, frames)
+        atomic_write_text(out / "obstacle_flow.csv", "t,upstream_depth_m,depth_jump,standoff_m,wake_length_m,"
+                          "wake_area_m2,wake_closed,protected_particles\n" + "".join(
+                              f"{f.time:.4f},{f.upstream_depth:.5f},{f.depth_jump:.3f},{f.standoff:.5f},"
+                              f"{f.wake_length:.5f},{f.wake_area:.6f},{int(f.wake_closed)},{f.protected_particles}\n"
+                              for f in result.frames))
+        print(result.row(), flush=True)
+        if "wedge" in scene.name:
+            ok &= result.shock_persists and result.protected_max == 0
+        else:
+            ok &= result.shock_persists and result.wake_persists
+    print(f"steady state: the last {100 * of.STEADY_FRACTION:.0f} % of the frames; shock: depth jump > "
+          f"{of.SHOCK_JUMP}; wedge: 'inside' counts particles within {of.PROTECTED_LENGTH} m behind the building")
+    print(f"acceptance (cylinder: shock and closed wake persist; wedge: shock persists, protected zone empty): "
+          f"{'PASS' if ok else 'FAIL'}; per frame -> {base}/<case>/obstacle_flow.csv")
     return 0 if ok else 1

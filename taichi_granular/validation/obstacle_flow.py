@@ -1,0 +1,207 @@
+"""Chute flow past a single obstacle ([A] section 6, MODEL.md section 3): the circular cylinder
+of Cui & Gray (2013) and the tetrahedral wedge of Tai et al. (2001) with a building block
+behind it.
+
+From each frame, on a grid of cells over the bed (s along the chute from its origin, y across),
+with the material particles' height above the bed:
+- flow depth per cell: the highest particle top (height + dp/2) in it, 0 where empty;
+- bow shock, on the centre line (|y| < one cell) upstream of the obstacle's front s_f: the
+  upstream depth h_0 (mean over s_f - 5 L .. s_f - 3 L, L the obstacle's width across the
+  chute), the peak depth h_1 (max over s_f - 2 L .. s_f), the depth jump h_1/h_0, and the
+  stand-off distance: from s_f up to the upstream end of the run of cells, adjacent to the
+  obstacle, whose depth is at least (h_0 + h_1)/2 -- where the flow surface jumps;
+- particle-free zone (wake / "vacuum") behind the obstacle: the empty cells connected (four
+  neighbours) to the cell just behind its rear s_b on the centre line; its length (furthest
+  s - s_b) and area; it is closed when it touches neither the chute's end nor its sides;
+- protected zone (wedge): the number of material particles in the box behind the rear,
+  ``PROTECTED_LENGTH`` long and as wide as the obstacle.
+A bow shock "appears" when the depth jump exceeds SHOCK_JUMP; steady state is the last
+``STEADY_FRACTION`` of the frames, over which shock and closed wake must hold in every frame.
+
+Units: m, m^2, s.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Dict, List, Optional, Sequence
+
+import numpy as np
+
+from ..config import BoxObstacle, ChuteObstacle, CylinderObstacle, Scene, WedgeObstacle
+from .obstacles import along_chute, obstacle_of
+
+SHOCK_JUMP = 1.5  # h_1/h_0 above which the frame has a bow shock
+STEADY_FRACTION = 0.3  # the last 30 % of the frames make the steady state
+PROTECTED_LENGTH = 0.10  # [m] behind the rear that the wedge protects (our choice)
+CELL_FACTOR = 1.5  # grid cell = 1.5 dp: a lattice of particles leaves no empty cell
+
+
+@dataclass
+class ObstacleGeometry:
+    front: float  # s of the face the flow meets [m]
+    rear: float  # s of the rear of the obstacle (of the building behind a wedge) [m]
+    width: float  # extent across the chute [m]
+
+
+def obstacle_geometry(scene: Scene) -> ObstacleGeometry:
+    """Front, rear and width of the scene's cylinder or wedge, along its chute."""
+    chute = obstacle_of(scene, ChuteObstacle)
+    solids = [o for o in scene.obstacles if isinstance(o, (CylinderObstacle, WedgeObstacle))]
+    if not solids:
+        raise ValueError(f"{scene.name}: no cylinder or wedge among the obstacles")
+    solid = solids[0]
+    origin = np.asarray(solid.origin if solid.origin is not None else np.zeros(scene.dimension), float)
+    s0 = float(along_chute(chute, origin[None, :])[0][0])
+    if isinstance(solid, CylinderObstacle):
+        return ObstacleGeometry(front=s0 - solid.radius, rear=s0 + solid.radius, width=2.0 * solid.radius)
+    rear = solid.length
+    for box in scene.obstacles:  # a building laid in the wedge's own frame, right behind it
+        if isinstance(box, BoxObstacle) and box.origin == solid.origin and box.tilt_deg == solid.tilt_deg:
+            rear = max(rear, box.upper[0])
+    return ObstacleGeometry(front=s0, rear=s0 + rear, width=solid.width)
+
+
+@dataclass
+class FlowFrame:
+    time: float
+    upstream_depth: float  # h_0 [m]
+    peak_depth: float  # h_1 [m]
+    standoff: float  # [m], nan without a shock
+    wake_length: float  # [m]
+    wake_area: float  # [m^2]
+    wake_closed: bool
+    protected_particles: int
+
+    @property
+    def depth_jump(self) -> float:
+        return self.peak_depth / self.upstream_depth if self.upstream_depth > 0 else float("nan")
+
+    @property
+    def shock(self) -> bool:
+        return self.depth_jump > SHOCK_JUMP
+
+
+def depth_grid(s: np.ndarray, y: np.ndarray, top: np.ndarray, s_edges: np.ndarray, y_edges: np.ndarray):
+    """(count, depth) per cell: particles in it and their highest top (0 where empty)."""
+    i = np.digitize(s, s_edges) - 1
+    j = np.digitize(y, y_edges) - 1
+    ok = (i >= 0) & (i < len(s_edges) - 1) & (j >= 0) & (j < len(y_edges) - 1)
+    count = np.zeros((len(s_edges) - 1, len(y_edges) - 1), int)
+    depth = np.zeros(count.shape)
+    np.add.at(count, (i[ok], j[ok]), 1)
+    np.maximum.at(depth, (i[ok], j[ok]), np.maximum(top[ok], 0.0))
+    return count, depth
+
+
+def bow_shock(s_centres: np.ndarray, centre_depth: np.ndarray, front: float, width: float):
+    """(h_0, h_1, stand-off) on the centre line (module docstring)  [m]."""
+    upstream = (s_centres >= front - 5 * width) & (s_centres <= front - 3 * width)
+    near = (s_centres >= front - 2 * width) & (s_centres < front)
+    if not upstream.any() or not near.any():
+        return float("nan"), float("nan"), float("nan")
+    h0 = float(centre_depth[upstream].mean())
+    h1 = float(centre_depth[near].max())
+    threshold = 0.5 * (h0 + h1)
+    standoff = float("nan")
+    cells = np.nonzero(s_centres < front)[0][::-1]  # from the obstacle upstream
+    run_start = None
+    for k in cells:
+        if centre_depth[k] >= threshold:
+            run_start = k
+        elif run_start is not None or s_centres[k] < front - 2 * width:
+            break
+    if run_start is not None:
+        standoff = float(front - s_centres[run_start])
+    return h0, h1, standoff
+
+
+def empty_region(count: np.ndarray, start) -> np.ndarray:
+    """Mask of the empty cells four-connected to ``start`` (none if it is occupied)."""
+    region = np.zeros(count.shape, bool)
+    if count[start] > 0:
+        return region
+    stack = [start]
+    region[start] = True
+    while stack:
+        i, j = stack.pop()
+        for di, dj in ((1, 0), (-1, 0), (0, 1), (0, -1)):
+            a, b = i + di, j + dj
+            if 0 <= a < count.shape[0] and 0 <= b < count.shape[1] and not region[a, b] and count[a, b] == 0:
+                region[a, b] = True
+                stack.append((a, b))
+    return region
+
+
+def measure_flow_frame(scene: Scene, frame: Dict[str, np.ndarray], time: float) -> FlowFrame:
+    chute = obstacle_of(scene, ChuteObstacle)
+    geo = obstacle_geometry(scene)
+    dp = scene.numerics.particle_spacing
+    cell = CELL_FACTOR * dp
+    n = int(np.sum(frame["is_wall"] == 0))
+    x = np.asarray(frame["position"][:n], float)
+    keep = np.ones(n, bool) if "outflow" not in frame else np.asarray(frame["outflow"][:n]) <= 0
+    s, height = along_chute(chute, x[keep])
+    y = x[keep, 1]
+    half = 0.5 * chute.width
+    s_end = float(sum(seg.length for seg in chute.segments))
+    s_edges = np.arange(0.0, s_end + cell, cell)
+    y_edges = np.linspace(-half, half, int(round(chute.width / cell)) + 1)
+    count, depth = depth_grid(s, y, height + 0.5 * dp, s_edges, y_edges)
+    s_centres = 0.5 * (s_edges[1:] + s_edges[:-1])
+    y_centres = 0.5 * (y_edges[1:] + y_edges[:-1])
+    centre = np.abs(y_centres) < cell
+    h0, h1, standoff = bow_shock(s_centres, depth[:, centre].max(axis=1), geo.front, geo.width)
+    start = (int(np.searchsorted(s_centres, geo.rear)), int(np.argmin(np.abs(y_centres))))
+    blocked = count.copy()
+    blocked[s_centres < geo.rear, :] = 1  # the obstacle's own footprint and upstream are not wake
+    wake = empty_region(blocked, start) if start[0] < len(s_centres) else np.zeros(count.shape, bool)
+    length = float(s_centres[wake.any(axis=1)].max() - geo.rear + 0.5 * cell) if wake.any() else 0.0
+    closed = bool(wake.any() and not wake[-1, :].any() and not wake[:, 0].any() and not wake[:, -1].any())
+    behind = (s >= geo.rear) & (s < geo.rear + PROTECTED_LENGTH) & (np.abs(y) < 0.5 * geo.width)
+    return FlowFrame(time=time, upstream_depth=h0, peak_depth=h1, standoff=standoff, wake_length=length,
+                     wake_area=float(wake.sum() * cell * cell), wake_closed=closed,
+                     protected_particles=int(behind.sum()))
+
+
+@dataclass
+class ObstacleFlowResult:
+    name: str
+    frames: List[FlowFrame] = field(default_factory=list)
+
+    @property
+    def steady(self) -> List[FlowFrame]:
+        k = max(1, int(round(STEADY_FRACTION * len(self.frames))))
+        return self.frames[-k:]
+
+    def mean(self, key: str) -> float:
+        values = np.array([getattr(f, key) for f in self.steady], float)
+        return float(np.nanmean(values)) if np.isfinite(values).any() else float("nan")
+
+    @property
+    def shock_persists(self) -> bool:
+        return all(f.shock for f in self.steady)
+
+    @property
+    def wake_persists(self) -> bool:
+        return all(f.wake_closed for f in self.steady)
+
+    @property
+    def protected_max(self) -> int:
+        return max(f.protected_particles for f in self.steady)
+
+    def row(self) -> str:
+        return (f"{self.name:24s} {1e3 * self.mean('upstream_depth'):7.1f} {self.mean('depth_jump'):6.2f} "
+                f"{1e3 * self.mean('standoff'):8.1f} {1e3 * self.mean('wake_length'):8.1f} "
+                f"{1e4 * self.mean('wake_area'):8.1f} {'yes' if self.shock_persists else 'no':>6s} "
+                f"{'yes' if self.wake_persists else 'no':>6s} {self.protected_max:6d} "
+                f"{self.steady[0].time:6.2f} {self.frames[-1].time:6.2f}")
+
+
+HEADER = (f"{'case':24s} {'h0 mm':>7s} {'jump':>6s} {'stand mm':>8s} {'wake mm':>8s} {'wake cm2':>8s} "
+          f"{'shock':>6s} {'closed':>6s} {'inside':>6s} {'from s':>6s} {'end s':>6s}")
+
+
+def evaluate_obstacle_flow(scene: Scene, times: Sequence[float], frames: Sequence[Dict[str, np.ndarray]]
+                           ) -> ObstacleFlowResult:
+    return ObstacleFlowResult(name=scene.name,
+                              frames=[measure_flow_frame(scene, f, t) for t, f in zip(times, frames)])
