@@ -131,6 +131,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("output_dir", help="a run's output directory (holds particles.pvd)")
     p.add_argument("--colour-by", help="particle field (speed, pressure, inertial_number, ...)")
     p.add_argument("--range", type=float, nargs=2, metavar=("MIN", "MAX"), help="fixed colour range")
+    p.add_argument("--camera", type=float, nargs=6, metavar=("X", "Y", "Z", "LX", "LY", "LZ"),
+                   help="3D: camera position and the point it looks at [m]")
+    p.add_argument("--up", type=float, nargs=3, metavar=("UX", "UY", "UZ"),
+                   help="3D, with --camera: the direction shown upwards (default z; 0 1 0 for a top view)")
+    p.add_argument("--fov", type=float, help="3D, with --camera: vertical field of view [deg]")
     p.add_argument("--width", type=int, help="image width [px]")
     p.add_argument("--view", type=float, nargs=4, metavar=("X0", "Y0", "X1", "Y1"), help="2D view box [m]")
     p.add_argument("--times", type=float, nargs="+", help="only the frames at these simulated times [s]")

@@ -107,3 +107,21 @@ def test_render_command_rerenders_a_run(tmp_path):
     assert len(list((out / "frames_pressure").glob("frame_*.png"))) == 3
     assert gif.stat().st_size > 0
     assert main(["render", str(out), "--colour-by", "nonsense"]) == 2
+
+
+def test_a_top_view_camera_shows_x_to_the_right(tmp_path):
+    """The render command's --camera/--up: looking straight down with up = +y, a particle at
+    +x appears right of the image centre and one at -x left of it (the default up = +z would be
+    parallel to the view)."""
+    import dataclasses
+
+    from taichi_granular.config import Camera
+
+    scene = scene_3d()
+    top = Camera(position=(0.0, 0.0, 3.0), look_at=(0.0, 0.0, 0.0), up=(0.0, 1.0, 0.0), field_of_view_deg=30.0)
+    renderer = Renderer(dataclasses.replace(scene, render=dataclasses.replace(scene.render, camera=top)))
+    arrays, n = frame([[0.4, 0.0, 0.0], [-0.4, 0.0, 0.0]], [1.0, 0.0], dp=0.3)
+    image = renderer.image(arrays, n, 0.0).astype(int)
+    row = image[150]
+    yellow = np.nonzero((row[:, 0] > 150) & (row[:, 1] > 150) & (row[:, 2] < 120))[0]  # viridis(1), speed 1
+    assert len(yellow) and yellow.mean() > 200, yellow

@@ -16,6 +16,12 @@ def render_output(args) -> int:
                                  ("range", tuple(args.range) if args.range else None)) if v is not None}
     if args.view:
         changes["view_lower"], changes["view_upper"] = tuple(args.view[:2]), tuple(args.view[2:])
+    if args.camera:  # 3D: another viewpoint (e.g. a top view, with --up 0 1 0: x to the right)
+        from ..config import Camera
+        old = settings.camera
+        changes["camera"] = Camera(position=tuple(args.camera[:3]), look_at=tuple(args.camera[3:]),
+                                   up=tuple(args.up) if args.up else (0.0, 0.0, 1.0),
+                                   field_of_view_deg=args.fov or (old.field_of_view_deg if old else 40.0))
     settings = dataclasses.replace(settings, **changes)
     scene = dataclasses.replace(scene, render=settings)
     scene.check()
