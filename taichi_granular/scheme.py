@@ -80,7 +80,7 @@ class Scheme:
         self.model = model
         self.smoothing = make_smoothing(scene.numerics.smoothing_function, scene.numerics.smoothing_length, scene.dimension)
         self.grid = NeighborGrid(self.state.position, scene.domain.lower, scene.domain.upper,
-                                 scene.domain.periodic_mask, self.smoothing.support)
+                                 scene.domain.periodic_mask, self.smoothing.support, n_moving=ini.n_material)
         self.walls = walls_cls(self.state, scene.gravity_vector)
         self.dt = ti.field(float, shape=())
         ctx = Context(state=self.state, grid=self.grid, smoothing=self.smoothing, walls=self.walls,

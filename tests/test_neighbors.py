@@ -1,5 +1,6 @@
 """The cell-list neighbour search finds exactly the brute-force neighbour sets, with periodic
-images, in 2D and 3D, and visits them in a deterministic order."""
+images, in 2D and 3D, and visits them in a deterministic order; with fixed particles binned
+once apart from the moving ones, it finds the same sets in the same (ascending id) order."""
 import numpy as np
 import pytest
 import taichi as ti
@@ -17,11 +18,11 @@ def brute_force(points, lower, upper, periodic, support):
     return (r < support) & ~np.eye(len(points), dtype=bool)
 
 
-def grid_neighbours(points, lower, upper, periodic, support):
+def grid_neighbours(points, lower, upper, periodic, support, n_moving=None, material_only=False):
     n, dim = points.shape
     x = ti.Vector.field(dim, float, n)
     x.from_numpy(points)
-    grid = NeighborGrid(x, lower, upper, periodic, support)
+    grid = NeighborGrid(x, lower, upper, periodic, support, n_moving=n_moving)
     count = ti.field(ti.i32, n)
     id_sum = ti.field(ti.i64, n)
     order_hash = ti.field(ti.i64, n)
@@ -38,7 +39,10 @@ def grid_neighbours(points, lower, upper, periodic, support):
         def run(self):
             for i in range(n):
                 acc = ti.Vector([0, 0, 0], ti.i64)
-                grid.for_each_neighbor(i, self.task, acc)
+                if ti.static(material_only):
+                    grid.for_each_material_neighbor(i, self.task, acc)
+                else:
+                    grid.for_each_neighbor(i, self.task, acc)
                 count[i] = ti.cast(acc[0], ti.i32)
                 id_sum[i] = acc[1]
                 order_hash[i] = acc[2]
@@ -72,3 +76,59 @@ def test_equals_brute_force(dim, periodic):
     # the visiting order is the same on a second, independent build
     _, _, order_again = grid_neighbours(points, lower, upper, periodic, support)
     np.testing.assert_array_equal(order, order_again)
+
+
+@pytest.mark.parametrize("dim,periodic", [CASES[1], CASES[4]])
+def test_fixed_particles_binned_apart(dim, periodic):
+    """Walls (ids >= n_moving) in their own list: same sets, same visiting order as one list;
+    moving the material and rebuilding keeps the fixed list; the material-only loop sees
+    exactly the neighbours with id < n_moving."""
+    rng = np.random.default_rng(7 + dim)
+    lower = np.zeros(dim)
+    upper = np.array([0.31, 0.2, 0.17][:dim])
+    support = 0.05
+    n, n_moving = 1200, 500
+    points = lower + rng.random((n, dim)) * (upper - lower)
+    mask = brute_force(points, lower, upper, periodic, support)
+    one_list = grid_neighbours(points, lower, upper, periodic, support)
+    split = grid_neighbours(points, lower, upper, periodic, support, n_moving=n_moving)
+    for a, b in zip(one_list, split):
+        np.testing.assert_array_equal(a, b)
+    np.testing.assert_array_equal(split[0], mask.sum(axis=1))
+    count, id_sum, _ = grid_neighbours(points, lower, upper, periodic, support, n_moving=n_moving,
+                                       material_only=True)
+    np.testing.assert_array_equal(count, mask[:, :n_moving].sum(axis=1))
+    expected = np.array([np.sum(np.nonzero(row[:n_moving])[0].astype(np.int64) ** 2) for row in mask])
+    np.testing.assert_array_equal(id_sum, expected)
+
+
+def test_rebuild_moves_only_the_material():
+    """A second build after the material moved finds the new material neighbours and the
+    walls where they were binned."""
+    points = np.array([[0.05, 0.05], [0.25, 0.15], [0.07, 0.05], [0.26, 0.15]])
+    x = ti.Vector.field(2, float, 4)
+    x.from_numpy(points)
+    grid = NeighborGrid(x, (0.0, 0.0), (0.31, 0.2), (False, False), 0.05, n_moving=2)
+    count = ti.field(ti.i32, 4)
+
+    @ti.data_oriented
+    class Probe:
+        @ti.func
+        def task(self, i, j, x_ij, r, acc: ti.template()):
+            acc += 1
+
+        @ti.kernel
+        def run(self):
+            for i in range(4):
+                acc = 0
+                grid.for_each_neighbor(i, self.task, acc)
+                count[i] = acc
+
+    grid.build()
+    Probe().run()
+    np.testing.assert_array_equal(count.to_numpy(), [1, 1, 1, 1])  # 0-2 and 1-3 pairs
+    points[0] = [0.255, 0.155]  # particle 0 moves next to 1 and wall 3
+    x.from_numpy(points)
+    grid.build()
+    Probe().run()
+    np.testing.assert_array_equal(count.to_numpy(), [2, 2, 0, 2])

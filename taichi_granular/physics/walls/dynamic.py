@@ -88,7 +88,8 @@ class DynamicWalls(NoWalls):
 @ti.data_oriented
 class WallContinuity(Stage):
     """d rho_j/dt = sum_i m_i (v_j - v_i) . grad_j W_ji over the material around boundary
-    particle j [A11] (boundary-boundary pairs are at rest relative to each other: no term)."""
+    particle j [A11] (boundary-boundary pairs are at rest relative to each other: no term, and
+    the loop visits the material only)."""
 
     name = "wall_continuity"
     category = "walls"
@@ -96,9 +97,8 @@ class WallContinuity(Stage):
 
     @ti.func
     def pair(self, j, i, x_ji, r, rate: ti.template()):
-        if i < self.state.n_material:
-            v_ji = self.state.velocity[j] - self.state.velocity[i]
-            rate += self.state.mass[i] * v_ji.dot(self.smoothing.gradient(x_ji, r))
+        v_ji = self.state.velocity[j] - self.state.velocity[i]
+        rate += self.state.mass[i] * v_ji.dot(self.smoothing.gradient(x_ji, r))
 
     @ti.kernel
     def _run(self):
@@ -106,7 +106,7 @@ class WallContinuity(Stage):
         for w in range(self.state.n_wall):
             j = self.state.n_material + w
             rate = 0.0
-            self.grid.for_each_neighbor(j, self.pair, rate)
+            self.grid.for_each_material_neighbor(j, self.pair, rate)
             self.state.density_rate[j] = rate
 
 
