@@ -14,7 +14,7 @@ from typing import Callable, Dict, List
 import numpy as np
 
 from ..config import ConfigError, Scene
-from .geometry import local_axes, obstacle_particles, to_global
+from .geometry import local_axes, obstacle_particles, slab, to_global
 
 
 @dataclass
@@ -62,12 +62,12 @@ def tangent_basis(normal: np.ndarray) -> List[np.ndarray]:
 
 
 def wall_lattice(point, normal, lower, upper, spacing: float, layers: int, staggered: bool = False):
-    """Lattice points behind a plane, inside the box [lower, upper].
+    """The rows of :func:`geometry.slab` behind the plane (``point``, ``normal``), laid along
+    its tangents from ``point`` and kept inside the box [lower, upper].
 
-    Returns (positions, distance behind the plane). Points are at
+    Returns (positions, distance behind the plane): points at
     point + (i + 1/2 + s_l) dp t (+ (k + 1/2 + s_l) dp t2) - (l + 1/2) dp n, l < layers, with
-    s_l = 0, or, ``staggered``, s_l = 1/2 on odd layers l, so that every gap of one row is
-    covered by a particle of the next (Dalrymple & Knio's staggered boundary rows).
+    s_l = 1/2 on odd rows when ``staggered``.
     """
     point = np.asarray(point, float)
     normal = np.asarray(normal, float)
@@ -75,17 +75,13 @@ def wall_lattice(point, normal, lower, upper, spacing: float, layers: int, stagg
     upper = np.asarray(upper, float)
     tangents = tangent_basis(normal)
     corners = np.array(np.meshgrid(*[[lo, hi] for lo, hi in zip(lower, upper)], indexing="ij")).reshape(len(lower), -1).T
-    ranges = []
+    extent = []
     for t in tangents:
         proj = (corners - point) @ t / spacing
-        ranges.append(np.arange(math.floor(proj.min()) - 1, math.ceil(proj.max()) + 1))
-    grids = np.meshgrid(*ranges, np.arange(layers), indexing="ij")
-    coords = [g.ravel() for g in grids]
-    depth = (coords[-1] + 0.5) * spacing
-    shift = 0.5 * (coords[-1] % 2) if staggered else np.zeros_like(depth)
-    pos = point - depth[:, None] * normal
-    for t, c in zip(tangents, coords[:-1]):
-        pos = pos + ((c + 0.5 + shift) * spacing)[:, None] * t
+        extent.append(((math.floor(proj.min()) - 1) * spacing, (math.ceil(proj.max()) + 1) * spacing))
+    local = slab(extent, spacing, layers, staggered)
+    pos = point + local[:, :-1] @ np.array(tangents) + local[:, -1:] * normal
+    depth = -local[:, -1]
     tol = 1e-9 * max(1.0, float(np.max(np.abs(upper - lower))))
     inside = np.all((pos >= lower - tol) & (pos <= upper + tol), axis=1)
     return pos[inside], depth[inside]

@@ -53,14 +53,15 @@ def to_local(points: np.ndarray, origin, tilt_deg: float) -> np.ndarray:
 # ---- slabs (planes) ------------------------------------------------------------------------
 
 
-def slab(extent: List[Tuple[float, float]], spacing: float, layers: int) -> np.ndarray:
-    """Staggered rows below a plane, local frame: the plane is the last coordinate = 0, its
-    extent the ranges of the others; row l sits at depth (l + 1/2) dp, shifted by dp/2 along
-    the plane on odd rows."""
+def slab(extent: List[Tuple[float, float]], spacing: float, layers: int, staggered: bool = True) -> np.ndarray:
+    """Rows below a plane, local frame: the plane is the last coordinate = 0, its extent the
+    ranges of the others; row l sits at depth (l + 1/2) dp, its points at lo + (k + 1/2) dp
+    along the plane, shifted by dp/2 on odd rows when ``staggered`` (Dalrymple & Knio's
+    staggered rows: every gap of one row is covered by a particle of the next)."""
     axes = [np.arange(int(math.floor((hi - lo) / spacing + 1e-9))) for lo, hi in extent]
     rows = []
     for layer in range(layers):
-        shift = 0.5 * (layer % 2)
+        shift = 0.5 * (layer % 2) if staggered else 0.0
         grids = np.meshgrid(*[lo + (a + 0.5 + shift) * spacing for a, (lo, hi) in zip(axes, extent)],
                             indexing="ij")
         pts = np.stack([g.ravel() for g in grids] + [np.full(grids[0].size, -(layer + 0.5) * spacing)], axis=1)
