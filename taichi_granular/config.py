@@ -870,18 +870,27 @@ TAGGED = {AnyMaterial: ("model", MATERIALS), AnyObstacle: ("shape", OBSTACLES)}
 
 
 def apply_overrides(data: dict, overrides: typing.Iterable[str]) -> dict:
-    """Apply ``dotted.key=value`` overrides (values parsed as YAML) to a raw scene mapping."""
+    """Apply ``dotted.key=value`` overrides (values parsed as YAML) to a raw scene mapping; an
+    integer key picks an entry of a list (``walls.0.friction_angle_deg=30``)."""
     for item in overrides:
         if "=" not in item:
             raise ConfigError(item, "override must look like section.key=value")
         dotted, raw = item.split("=", 1)
         keys = dotted.strip().split(".")
         node = data
-        for key in keys[:-1]:
-            node = node.setdefault(key, {})
-            if not isinstance(node, dict):
-                raise ConfigError(dotted, f"'{key}' is not a section")
-        node[keys[-1]] = yaml.safe_load(raw)
+        for depth, key in enumerate(keys):
+            path = ".".join(keys[:depth + 1])
+            last = depth == len(keys) - 1
+            if isinstance(node, list):
+                if not key.isdigit() or int(key) >= len(node):
+                    raise ConfigError(path, f"'{key}' is not an index of this list of {len(node)} entries")
+                key = int(key)
+            elif not isinstance(node, dict):
+                raise ConfigError(path, f"'{keys[depth - 1]}' is not a section")
+            if last:
+                node[key] = yaml.safe_load(raw)
+            else:
+                node = node.setdefault(key, {}) if isinstance(node, dict) else node[key]
     return data
 
 

@@ -27,10 +27,28 @@ def test_fronts_ignore_a_detached_grain_and_rest_follows_the_energy():
     m = cc.measure_frame(arrays, n, 0.0, dp, 0.0, 2.6 * dp)
     assert m.front_right == pytest.approx(0.05) and m.front_left == pytest.approx(0.05)
     assert m.height == pytest.approx(0.05) and m.escaped == 1
+    # grains parked outside an open face (two of them, next to each other) are no front
+    parked = np.vstack([pos, [[0.6, -0.02], [0.605, -0.02]]])
+    flags = np.r_[np.zeros(n), 1.0, 1.0]
+    arrays = {"position": parked, "mass": np.full(n + 2, 1.0), "density": np.full(n + 2, 1.0 / dp**2),
+              "outflow": flags}
+    m = cc.measure_frame(arrays, n + 2, 0.0, dp, 0.0, 2.6 * dp)
+    assert m.front_right == pytest.approx(0.05) and m.escaped == 3
     t = np.linspace(0, 1, 11)
     ke = np.array([0, 5, 10, 4, 1, 0.1, 0.02, 0.009, 0.005, 0.004, 0.004])
     assert cc.time_to_rest(t, ke) == pytest.approx(0.7)
     assert cc.time_to_rest(t, ke + 0.5) is None
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_connected_equals_brute_force(dim):
+    rng = np.random.default_rng(dim)
+    x = rng.random((800, dim)) * np.array([0.3, 0.2, 0.1][:dim])
+    d = np.linalg.norm(x[:, None] - x[None], axis=2)
+    np.fill_diagonal(d, np.inf)
+    expected = (d < 0.01).any(axis=1)
+    assert 0 < expected.sum() < len(x)
+    np.testing.assert_array_equal(cc.connected(x, 0.01), expected)
 
 
 def test_front_stop_is_read_when_the_front_slows_to_a_creep():

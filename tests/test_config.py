@@ -85,3 +85,14 @@ def test_material_behind_a_wall_is_an_error():
 def test_overrides_apply_dotted_keys(tmp_path):
     scene = load_scene(config_path("mu_i/inclined_plane.yaml"), ["numerics.cfl=0.25", "run.end_time=0.5"])
     assert scene.numerics.cfl == 0.25 and scene.run.end_time == 0.5
+
+
+def test_overrides_index_lists():
+    """An integer key picks a list entry (a wall, a block); a bad index names the key path."""
+    scene = load_scene(config_path("elastoplastic/collapse3d_a0_90_coarse.yaml"),
+                       ["walls.0.friction_angle_deg=30", "particles.0.upper=[0.1, 0.1, 0.09]"])
+    assert scene.walls[0].friction_angle_deg == 30
+    assert scene.particles[0].upper[2] == 0.09
+    with pytest.raises(ConfigError, match="not an index") as info:
+        load_scene(config_path("elastoplastic/collapse3d_a0_90_coarse.yaml"), ["walls.3.normal=[0, 0, 1]"])
+    assert info.value.path == "walls.3"

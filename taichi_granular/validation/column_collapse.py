@@ -22,6 +22,7 @@ afterwards and the kinetic energy left at the end are reported beside it.
 from __future__ import annotations
 
 import csv
+import itertools
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -30,6 +31,7 @@ from typing import Dict, List, Optional, Sequence
 import numpy as np
 
 from ..config import Scene
+from . import left_domain
 
 REST_FRACTION = 1e-3  # at rest: kinetic energy below this share of its peak
 FRONT_STOP_FRACTION = 0.05  # the front has stopped: its speed below this share of its peak speed
@@ -49,20 +51,29 @@ def column_axis(scene: Scene) -> np.ndarray:
 
 
 def connected(position: np.ndarray, reach: float) -> np.ndarray:
-    """True for particles with at least one other particle closer than ``reach``."""
-    n = len(position)
-    order = np.argsort(position[:, 0])
-    x = position[order]
+    """True for particles with at least one other particle closer than ``reach``.
+
+    Cells of edge ``reach``: every close pair lies in the same or adjacent cells, so each
+    particle is checked against the particles of its 3^dim cells only (vectorised)."""
+    n, dim = position.shape
+    if n == 0:
+        return np.zeros(0, bool)
+    cell = np.floor((position - position.min(axis=0)) / reach).astype(np.int64)
+    shape = tuple(int(v) for v in cell.max(axis=0) + 3)
+    keys = np.ravel_multi_index((cell + 1).T, shape)
+    order = np.argsort(keys, kind="stable")
+    sorted_keys = keys[order]
     ok = np.zeros(n, bool)
-    for k in range(n):  # sweep in x: only the next particles within reach can be close
-        j = k + 1
-        while j < n and x[j, 0] - x[k, 0] < reach:
-            if np.sum((x[j] - x[k]) ** 2) < reach * reach:
-                ok[k] = ok[j] = True
-            j += 1
-    result = np.zeros(n, bool)
-    result[order] = ok
-    return result
+    for offset in itertools.product((-1, 0, 1), repeat=dim):
+        neighbour_keys = np.ravel_multi_index((cell + 1 + np.array(offset)).T, shape)
+        first = np.searchsorted(sorted_keys, neighbour_keys, side="left")
+        count = np.searchsorted(sorted_keys, neighbour_keys, side="right") - first
+        i = np.repeat(np.arange(n), count)
+        within = np.arange(count.sum()) - np.repeat(np.cumsum(count) - count, count)
+        j = order[np.repeat(first, count) + within]
+        close = (i != j) & (np.sum((position[i] - position[j]) ** 2, axis=1) < reach * reach)
+        ok[i[close]] = True
+    return ok
 
 
 @dataclass
@@ -72,7 +83,7 @@ class FrameMeasure:
     front_left: float  # [m] from the axis; 3D: the nearest sector front
     front_mean: float  # [m] from the axis: mean of the two fronts (2D) or of the sector fronts (3D)
     height: float  # [m]
-    escaped: int  # particles with no other particle within the kernel support 2h
+    escaped: int  # particles with no other particle within the kernel support 2h, or out of the domain
 
 
 def measure_frame(arrays: Dict[str, np.ndarray], n_material: int, centre: np.ndarray, spacing: float,
@@ -82,7 +93,9 @@ def measure_frame(arrays: Dict[str, np.ndarray], n_material: int, centre: np.nda
     # particle radius: half the edge of its lattice cell of volume m/rho, so that the column as
     # laid measures r0 = the block's half-width
     radius = 0.5 * (arrays["mass"][:n_material] / arrays["density"][:n_material]) ** (1.0 / dim)
-    ok = connected(x, 1.5 * spacing)
+    inside = ~left_domain(arrays, n_material)  # grains that slid off the floor through an open face
+    ok = np.zeros(n_material, bool)
+    ok[inside] = connected(x[inside], 1.5 * spacing)
     rel = x[ok, : dim - 1] - centre
     if dim == 2:
         fronts = np.array([np.max(rel[:, 0] + radius[ok]), np.max(-rel[:, 0] + radius[ok])])
@@ -94,7 +107,7 @@ def measure_frame(arrays: Dict[str, np.ndarray], n_material: int, centre: np.nda
     return FrameMeasure(time=time, front_right=float(fronts.max()), front_left=float(fronts.min()),
                         front_mean=float(fronts.mean()),
                         height=float(np.max(x[ok, dim - 1] + radius[ok])),
-                        escaped=int(n_material - connected(x, support).sum()))
+                        escaped=int(n_material - connected(x[inside], support).sum()))
 
 
 @dataclass

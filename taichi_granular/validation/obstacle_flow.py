@@ -28,6 +28,7 @@ from typing import Dict, List, Optional, Sequence
 import numpy as np
 
 from ..config import BoxObstacle, ChuteObstacle, CylinderObstacle, Scene, WedgeObstacle
+from . import left_domain
 from .obstacles import along_chute, obstacle_of
 
 SHOCK_JUMP = 1.5  # h_1/h_0 above which the frame has a bow shock
@@ -139,7 +140,7 @@ def measure_flow_frame(scene: Scene, frame: Dict[str, np.ndarray], time: float) 
     cell = CELL_FACTOR * dp
     n = int(np.sum(frame["is_wall"] == 0))
     x = np.asarray(frame["position"][:n], float)
-    keep = np.ones(n, bool) if "outflow" not in frame else np.asarray(frame["outflow"][:n]) <= 0
+    keep = ~left_domain(frame, n)
     s, height = along_chute(chute, x[keep])
     y = x[keep, 1]
     half = 0.5 * chute.width

@@ -21,6 +21,7 @@ import numpy as np
 
 from ..config import ChuteObstacle, PostRowsObstacle, Scene
 from ..scene.geometry import local_axes, to_local
+from . import left_domain
 
 LEE = 0.10  # [m] past the last row that still counts as retained (area 2; our choice)
 EXPERIMENT = {"case1": 0.76, "case2": 0.48, "case3": 0.80}  # Yellin et al. (2013), via [A]
@@ -99,13 +100,6 @@ HEADER = (f"{'case':28s} {'eff%':>6s} {'exp%':>6s} {'[A]%':>6s} {'err pt':>7s}  
           f"{'pass%':>5s} {'45deg%':>5s}  {'edge m':>6s} {'stop s':>6s} {'end s':>6s} {'xed':>4s} {'off':>4s}")
 
 
-def _left_domain(frame: Dict[str, np.ndarray], n: int) -> np.ndarray:
-    """Material particles taken out of the flow at an open face (domain.outflow)."""
-    if "outflow" not in frame:
-        return np.zeros(n, bool)
-    return np.asarray(frame["outflow"][:n]) > 0
-
-
 def case_of(name: str) -> str:
     for case in EXPERIMENT:
         if case in name:
@@ -121,7 +115,7 @@ def evaluate_stake_rows(scene: Scene, times: Sequence[float], frames: Sequence[D
     edges = []
     for f in frames:
         n = int(np.sum(f["is_wall"] == 0))
-        on_chute = ~_left_domain(f, n)
+        on_chute = ~left_domain(f, n)
         if scene.dimension == 3:
             on_chute &= np.abs(f["position"][:n, 1]) <= 0.5 * chute.width
         s, _ = along_chute(chute, f["position"][:n][on_chute])
