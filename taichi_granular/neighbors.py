@@ -105,6 +105,19 @@ class NeighborGrid:
                 x[a] = self.lower[a] + (x[a] - self.lower[a]) - self.box[a] * ti.floor((x[a] - self.lower[a]) / self.box[a])
         return x
 
+    @ti.func
+    def in_reach(self, x):
+        """False for a position more than one support outside the box along a non-periodic
+        axis: such a particle (one parked beyond an open face, physics/outflow.py) is binned
+        nowhere and has no neighbours. Clamping it into the edge cells instead would pile every
+        parked particle into a few cells, each scanning all the others at every step."""
+        ok = True
+        for a in ti.static(range(self.dim)):
+            if ti.static(not self.periodic[a]):
+                if x[a] < self.lower[a] - self.support or x[a] > self.lower[a] + self.box[a] + self.support:
+                    ok = False
+        return ok
+
     # ---- build --------------------------------------------------------------------------------
 
     def build(self) -> None:
@@ -127,9 +140,11 @@ class NeighborGrid:
             self.cell_count[c] = 0
         ti.loop_config(serialize=runtime.serial_loops)
         for i in range(begin, end):
-            c = self.flat_index(self.cell_coord(self.position[i]))
+            c = -1
+            if self.in_reach(self.position[i]):
+                c = self.flat_index(self.cell_coord(self.position[i]))
+                ti.atomic_add(self.cell_count[c], 1)
             self.particle_cell[i] = c
-            ti.atomic_add(self.cell_count[c], 1)
         # exclusive scan: per block in parallel, then the block totals serially, then offsets
         ti.loop_config(serialize=runtime.serial_loops)
         for b in range(self.n_blocks):
@@ -153,8 +168,10 @@ class NeighborGrid:
             self.cursor[c] = cell_start[c]
         ti.loop_config(serialize=runtime.serial_loops)
         for i in range(begin, end):
-            slot = ti.atomic_add(self.cursor[self.particle_cell[i]], 1)
-            sorted_ids[slot] = i
+            c = self.particle_cell[i]
+            if c >= 0:
+                slot = ti.atomic_add(self.cursor[c], 1)
+                sorted_ids[slot] = i
         # insertion sort inside each cell (a handful of particles) -> deterministic order
         ti.loop_config(serialize=runtime.serial_loops)
         for c in range(self.n_cells):
@@ -185,9 +202,10 @@ class NeighborGrid:
     def _visit(self, i, task: ti.template(), acc: ti.template(), lists: ti.template()):
         x_i = self.position[i]
         home = self.cell_coord(x_i)
+        reach = self.in_reach(x_i)
         for offset in ti.grouped(ti.ndrange(*([(-1, 2)] * self.dim))):
             c = home + offset
-            inside = True
+            inside = reach
             for a in ti.static(range(self.dim)):
                 if ti.static(self.periodic[a]):
                     c[a] = (c[a] + self.cells[a]) % self.cells[a]

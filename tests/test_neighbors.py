@@ -132,3 +132,13 @@ def test_rebuild_moves_only_the_material():
     grid.build()
     Probe().run()
     np.testing.assert_array_equal(count.to_numpy(), [2, 2, 0, 2])
+
+
+def test_particles_beyond_reach_are_binned_nowhere():
+    """A particle parked more than one support outside the box (an open face) has no
+    neighbours and is nobody's; one just outside is still clamped into the edge cells."""
+    support = 0.05
+    points = np.array([[0.30, 0.10], [0.34, 0.10], [0.40, 0.10], [0.41, 0.10], [0.29, 0.10]])
+    # 1: 0.03 beyond the face x = 0.31 (within reach); 2 and 3: 0.09 and 0.10 beyond (parked)
+    count, _, _ = grid_neighbours(points, np.zeros(2), np.array([0.31, 0.2]), (False, False), support)
+    np.testing.assert_array_equal(count, [2, 1, 0, 0, 1])  # 1-4 are exactly one support apart
