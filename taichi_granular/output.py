@@ -22,6 +22,15 @@ import numpy as np
 
 from .config import Scene, dump_scene
 
+
+def left_domain(arrays: Dict[str, np.ndarray], n_material: int) -> np.ndarray:
+    """Mask of the n_material material particles taken out of the flow at an open face
+    (``domain.outflow``, physics/outflow.py), from a snapshot or a saved frame (whose
+    ``outflow`` field may span every particle)."""
+    if "outflow" not in arrays:
+        return np.zeros(n_material, bool)
+    return np.asarray(arrays["outflow"])[:n_material] > 0
+
 DIAGNOSTIC_COLUMNS = ("t", "step", "dt", "kinetic_energy", "max_speed", "max_density_error")
 OPTIONAL_DIAGNOSTIC_COLUMNS = ("outflow",)  # particles that left by an open face (domain.outflow)
 INTEGER_DIAGNOSTIC_COLUMNS = ("step", "outflow")

@@ -60,6 +60,17 @@ def test_walls_are_grey_and_material_is_drawn_over_them():
     assert np.abs(overlap.astype(int) - np.round(255 * colour_map(np.array([1.0]), 0, 1)[0])).max() <= 1
 
 
+@pytest.mark.parametrize("padded", [False, True])
+def test_particles_out_of_the_flow_are_not_drawn(padded):
+    """A particle taken out at an open face gets no size, whether its ``outflow`` flag spans the
+    material (a run's snapshot) or every particle (a saved VTU frame, walls padded with 0)."""
+    renderer = Renderer(scene_2d())
+    arrays, _ = frame([[0.02, 0.05], [0.06, 0.05], [0.08, 0.05]], [0.5, 0.5, 0.0])
+    arrays["outflow"] = np.array([0.0, 1.0, 0.0] if padded else [0.0, 1.0])
+    radii = renderer.radii(arrays, 2)
+    assert radii[0] > 0 and radii[1] == 0 and radii[2] > 0
+
+
 def test_unknown_colour_field_names_the_key():
     arrays, _ = frame([[0.05, 0.05]], [0.3])
     with pytest.raises(ConfigError, match=r"render.colour_by: no particle field 'presure'; did you mean 'pressure'"):

@@ -13,6 +13,7 @@ from typing import Dict, Sequence, Tuple
 import numpy as np
 
 from ..config import Scene
+from ..output import left_domain
 from .colormap import BACKGROUND, NEUTRAL_GREY, colour_map
 from .font import GLYPH_HEIGHT, draw_text, text_width
 
@@ -119,8 +120,7 @@ class Renderer:
         n = len(arrays["position"])
         volume = np.full(n, self.scene.numerics.particle_spacing ** self.dim)
         volume[:n_material] = arrays["mass"][:n_material] / arrays["density"][:n_material]
-        if "outflow" in arrays:  # taken out of the flow (physics/outflow.py): not drawn
-            volume[:n_material][np.asarray(arrays["outflow"]) > 0] = 0.0
+        volume[:n_material][left_domain(arrays, n_material)] = 0.0  # out of the flow: not drawn
         if self.dim == 2:
             return np.sqrt(volume / math.pi)
         return np.cbrt(3.0 * volume / (4.0 * math.pi))
