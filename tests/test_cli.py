@@ -3,6 +3,7 @@ import csv
 
 import meshio
 import numpy as np
+import pytest
 import yaml
 
 from scenes import layer
@@ -89,3 +90,20 @@ def test_resume_continues_exactly_where_the_run_stopped(tmp_path):
 def test_resume_without_checkpoint_is_a_clear_error(tmp_path, capsys):
     assert main(["resume", str(tmp_path)]) == 2
     assert "holds no run" in capsys.readouterr().err
+
+
+def test_validation_cases_are_picked_by_their_short_names():
+    from types import SimpleNamespace
+    from taichi_granular.validation.cli import _case_paths
+
+    def stems(folder, pattern, cases, resolution="coarse"):
+        args = SimpleNamespace(cases=cases, resolution=resolution)
+        return [p.stem for p in _case_paths(folder, pattern, args)]
+
+    assert stems("elastoplastic", "collapse3d_*_coarse.yaml", ["a2_75"]) == ["collapse3d_a2_75_coarse"]
+    assert stems("elastoplastic", "collapse3d_*_coarse.yaml", ["a2_75"], "paper") == ["collapse3d_a2_75"]
+    assert stems("elastoplastic", "stake_rows_case*_coarse.yaml", ["case1", "case3"]) == \
+        ["stake_rows_case1_coarse", "stake_rows_case3_coarse"]
+    assert stems("mu_i", "collapse_a*.yaml", ["a0_90"]) == ["collapse_a0_90"]
+    with pytest.raises(FileNotFoundError, match="known: collapse3d_a0_90_coarse"):
+        stems("elastoplastic", "collapse3d_*_coarse.yaml", ["a9_99"])

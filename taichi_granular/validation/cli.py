@@ -40,7 +40,7 @@ def validate_inclined_plane(args) -> int:
 def _case_paths(folder: str, pattern: str, args):
     """The scene files of a validation family: ``pattern`` (or a list of them) names the coarse CPU variants;
     ``--resolution paper`` picks the paper-resolution files instead; ``--cases`` filters by
-    stem or by the stem without its family prefix."""
+    stem, or by its end without the ``_coarse`` suffix (``a2_75``, ``case1``, ``cylinder``)."""
     patterns = [pattern] if isinstance(pattern, str) else list(pattern)
     if getattr(args, "resolution", "coarse") == "paper":
         patterns = [p.replace("_coarse", "") for p in patterns]
@@ -49,8 +49,11 @@ def _case_paths(folder: str, pattern: str, args):
     if not args.cases:
         return known
     wanted = set(args.cases)
-    paths = [p for p in known if p.stem in wanted or p.stem.split("_", 1)[1] in wanted
-             or any(w in p.stem.split("_") for w in wanted)]
+    def matches(stem: str, name: str) -> bool:
+        base = stem.replace("_coarse", "")
+        return name in (stem, base) or base.endswith("_" + name)
+
+    paths = [p for p in known if any(matches(p.stem, w) for w in wanted)]
     if not paths:
         raise FileNotFoundError(f"no case among {sorted(args.cases)}; known: {', '.join(p.stem for p in known)}")
     return paths
