@@ -4,7 +4,9 @@ Particles are binned into cells of edge >= the kernel support 2h by a counting s
 count per cell -> exclusive prefix sum (blocked, so it runs on every Taichi arch; Taichi 1.7's
 built-in parallel scan does not run on the CPU backend) -> scatter -> each cell's list sorted
 by particle id. The last step makes the order of every pair sum, and hence every result,
-independent of thread scheduling: runs are bitwise reproducible on the CPU.
+independent of thread scheduling: runs are bitwise reproducible on the CPU. The material is
+rebinned at every build; boundary particles, which never move, are binned once into a second
+cell list (see :class:`NeighborGrid`).
 
 Every pair loop in the package goes through :meth:`NeighborGrid.for_each_neighbor`, which
 hands ``task(i, j, x_ij, r, acc)`` the minimum-image displacement x_ij = x_i - x_j.
