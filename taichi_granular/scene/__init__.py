@@ -240,7 +240,8 @@ def _check_inside_domain(points: np.ndarray, scene: Scene, key_of, message: str)
     lower = np.array(scene.domain.lower)
     upper = np.array(scene.domain.upper)
     periodic = np.array(scene.domain.periodic_mask)
-    outside = np.any(((points < lower) | (points > upper)) & ~periodic, axis=1)
+    tol = 1e-9 * max(1.0, float(np.max(upper - lower)))  # rounding of lattice points laid on a face
+    outside = np.any(((points < lower - tol) | (points > upper + tol)) & ~periodic, axis=1)
     if np.any(outside):
         i = int(np.argmax(outside))
         raise ConfigError(key_of(i), f"{message}: particle at {points[i].tolist()} is outside "
