@@ -61,7 +61,7 @@ class NeighborGrid:
         self.cell_count = ti.field(ti.i32, self.n_cells)
         self.cursor = ti.field(ti.i32, self.n_cells)
         self.block_sum = ti.field(ti.i32, self.n_blocks)
-        self.fixed_sorted_ids = ti.field(ti.i32, max(1, self.n_fixed)) if self.n_fixed else None
+        self.fixed_sorted_ids = ti.field(ti.i32, self.n_fixed) if self.n_fixed else None
         self.fixed_cell_start = ti.field(ti.i32, self.n_cells + 1) if self.n_fixed else None
         self.lists = ((self.sorted_ids, self.cell_start),)
         if self.n_fixed:

@@ -22,6 +22,10 @@ import numpy as np
 
 from .config import Scene, dump_scene
 
+DIAGNOSTIC_COLUMNS = ("t", "step", "dt", "kinetic_energy", "max_speed", "max_density_error")
+OPTIONAL_DIAGNOSTIC_COLUMNS = ("outflow",)  # particles that left by an open face (domain.outflow)
+INTEGER_DIAGNOSTIC_COLUMNS = ("step", "outflow")
+
 
 def left_domain(arrays: Dict[str, np.ndarray], n_material: int) -> np.ndarray:
     """Mask of the n_material material particles taken out of the flow at an open face
@@ -31,9 +35,7 @@ def left_domain(arrays: Dict[str, np.ndarray], n_material: int) -> np.ndarray:
         return np.zeros(n_material, bool)
     return np.asarray(arrays["outflow"])[:n_material] > 0
 
-DIAGNOSTIC_COLUMNS = ("t", "step", "dt", "kinetic_energy", "max_speed", "max_density_error")
-OPTIONAL_DIAGNOSTIC_COLUMNS = ("outflow",)  # particles that left by an open face (domain.outflow)
-INTEGER_DIAGNOSTIC_COLUMNS = ("step", "outflow")
+
 # Fields written to VTU for every particle (walls included), if the state has them.
 VTU_FIELDS = ("velocity", "pressure", "density", "mass")
 

@@ -61,6 +61,12 @@ def tangent_basis(normal: np.ndarray) -> List[np.ndarray]:
     return [t1, np.cross(n, t1)]
 
 
+def face_tolerance(lower, upper) -> float:
+    """Distance [m] by which a lattice point laid on a face of the box [lower, upper] may miss
+    it through rounding and still count as inside."""
+    return 1e-9 * max(1.0, float(np.max(np.abs(np.asarray(upper, float) - np.asarray(lower, float)))))
+
+
 def wall_lattice(point, normal, lower, upper, spacing: float, layers: int, staggered: bool = False):
     """The rows of :func:`geometry.slab` behind the plane (``point``, ``normal``), laid along
     its tangents from ``point`` and kept inside the box [lower, upper].
@@ -82,7 +88,7 @@ def wall_lattice(point, normal, lower, upper, spacing: float, layers: int, stagg
     local = slab(extent, spacing, layers, staggered)
     pos = point + local[:, :-1] @ np.array(tangents) + local[:, -1:] * normal
     depth = -local[:, -1]
-    tol = 1e-9 * max(1.0, float(np.max(np.abs(upper - lower))))
+    tol = face_tolerance(lower, upper)
     inside = np.all((pos >= lower - tol) & (pos <= upper + tol), axis=1)
     return pos[inside], depth[inside]
 
@@ -240,7 +246,7 @@ def _check_inside_domain(points: np.ndarray, scene: Scene, key_of, message: str)
     lower = np.array(scene.domain.lower)
     upper = np.array(scene.domain.upper)
     periodic = np.array(scene.domain.periodic_mask)
-    tol = 1e-9 * max(1.0, float(np.max(upper - lower)))  # rounding of lattice points laid on a face
+    tol = face_tolerance(lower, upper)
     outside = np.any(((points < lower - tol) | (points > upper + tol)) & ~periodic, axis=1)
     if np.any(outside):
         i = int(np.argmax(outside))

@@ -49,6 +49,7 @@ def _case_paths(folder: str, pattern: str, args):
     if not args.cases:
         return known
     wanted = set(args.cases)
+
     def matches(stem: str, name: str) -> bool:
         base = stem.replace("_coarse", "")
         return name in (stem, base) or base.endswith("_" + name)

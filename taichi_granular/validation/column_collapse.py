@@ -31,7 +31,7 @@ from typing import Dict, List, Optional, Sequence
 import numpy as np
 
 from ..config import Scene
-from . import left_domain
+from ..output import left_domain
 
 REST_FRACTION = 1e-3  # at rest: kinetic energy below this share of its peak
 FRONT_STOP_FRACTION = 0.05  # the front has stopped: its speed below this share of its peak speed

@@ -28,7 +28,7 @@ from typing import Dict, List, Optional, Sequence
 import numpy as np
 
 from ..config import BoxObstacle, ChuteObstacle, CylinderObstacle, Scene, WedgeObstacle
-from . import left_domain
+from ..output import left_domain
 from .obstacles import along_chute, obstacle_of
 
 SHOCK_JUMP = 1.5  # h_1/h_0 above which the frame has a bow shock

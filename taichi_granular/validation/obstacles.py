@@ -21,7 +21,7 @@ import numpy as np
 
 from ..config import ChuteObstacle, PostRowsObstacle, Scene
 from ..scene.geometry import local_axes, to_local
-from . import left_domain
+from ..output import left_domain
 
 LEE = 0.10  # [m] past the last row that still counts as retained (area 2; our choice)
 EXPERIMENT = {"case1": 0.76, "case2": 0.48, "case3": 0.80}  # Yellin et al. (2013), via [A]
