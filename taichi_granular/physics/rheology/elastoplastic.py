@@ -134,7 +134,10 @@ class ElastoplasticMohrCoulomb:
 
     @ti.func
     def sound_speed(self, k):
-        """sqrt((K + 4G/3)/rho_0), the longitudinal elastic wave speed  [m/s]."""
+        """sqrt((K + 4G/3)/rho_0), the longitudinal elastic wave speed: the c of the artificial
+        viscosity [A16-19]  [m/s]. Since alpha c then grows as sqrt(E), E steers a flow through
+        the viscosity, not through the elastic strains: a scene that lowers E raises alpha by
+        sqrt(E_paper/E) (README, lowering E; the sound speed of K alone was measured worse)."""
         return self.wave_speed
 
     @ti.func
