@@ -215,6 +215,21 @@ def test_layer_on_a_slope_below_the_friction_angle_holds():
     assert sim.last_diagnostics["max_speed"] < 4e-3, sim.last_diagnostics
 
 
+def small_collapse_data(end_time):
+    """The coarse a = 0.9 column of [A] shrunk to r0 = 6 cm at dp = 1 cm (560 particles), as a
+    scene dict, run for ``end_time`` [s] without stopping at rest."""
+    import yaml
+
+    from taichi_granular.paths import config_path
+
+    data = yaml.safe_load(config_path("elastoplastic/collapse3d_a0_90_coarse.yaml").read_text())
+    data["domain"].update(lower=[-0.18, -0.18, -0.04], upper=[0.18, 0.18, 0.08])
+    data["particles"][0].update(lower=[-0.06, -0.06, 0.0], upper=[0.06, 0.06, 0.054])
+    data["numerics"].update(particle_spacing=0.01)
+    data["run"].update(end_time=end_time, stop_at_rest=None)
+    return data
+
+
 def test_small_3d_collapse_runs_to_rest_near_the_lube_runout():
     """The coarse a = 0.9 column of [A] shrunk to r0 = 6 cm at dp = 1 cm (560 particles) on the
     config's Coulomb floor (delta = phi): it comes to rest (kinetic energy below 1e-3 of its
@@ -223,17 +238,10 @@ def test_small_3d_collapse_runs_to_rest_near_the_lube_runout():
     shortfall shrinks as dp falls (-26.0 % at r0/dp = 10, -19.1 % at r0/dp = 13, README), so
     the band below catches a change of physics either way. The full coarse case (r0 = 0.1 m)
     is `taichi-granular validate column-collapse-3d`."""
-    import yaml
-
     from scenes import run_frames
-    from taichi_granular.paths import config_path
     from taichi_granular.validation import column_collapse as cc
 
-    data = yaml.safe_load(config_path("elastoplastic/collapse3d_a0_90_coarse.yaml").read_text())
-    data["domain"].update(lower=[-0.18, -0.18, -0.04], upper=[0.18, 0.18, 0.08])
-    data["particles"][0].update(lower=[-0.06, -0.06, 0.0], upper=[0.06, 0.06, 0.054])
-    data["numerics"].update(particle_spacing=0.01)
-    data["run"].update(end_time=0.6, stop_at_rest=None)
+    data = small_collapse_data(end_time=0.6)
     scene = scene_from_dict(data, name="small_collapse3d")
     times, frames, diagnostics = run_frames(scene, 0.05)
     result = cc.evaluate(scene, times, frames, diagnostics, read_at_end=True)
@@ -252,20 +260,11 @@ def test_youngs_modulus_acts_on_a_collapse_only_through_the_artificial_viscosity
     a granular flow, not its elastic strains. The 6 cm column of the test above, after 0.3 s:
     E = 5 MPa with alpha = 2 and E = 1.25 MPa with alpha = 4 (the same alpha c) put the front
     (95th percentile radius) within 0.6 mm of each other, E = 1.25 MPa with alpha = 2 (half the
-    alpha c) 2.4 mm further out; measured 91.0 / 91.6 / 93.4 mm. (Measured at rest, README: -50.9 % of Lube both at
-    E = 150 MPa, alpha = 1 and at E = 5 MPa, alpha = 5.48; -32.6 % at E = 5 MPa, alpha = 1.)"""
-    import yaml
-
-    from taichi_granular.paths import config_path
-
-    base = yaml.safe_load(config_path("elastoplastic/collapse3d_a0_90_coarse.yaml").read_text())
-    base["domain"].update(lower=[-0.18, -0.18, -0.04], upper=[0.18, 0.18, 0.08])
-    base["particles"][0].update(lower=[-0.06, -0.06, 0.0], upper=[0.06, 0.06, 0.054])
-    base["numerics"].update(particle_spacing=0.01)
-    base["run"].update(end_time=0.3, stop_at_rest=None)
-
+    alpha c) 2.4 mm further out; measured 91.0 / 91.6 / 93.4 mm. (Measured at rest, README:
+    -50.9 % of Lube both at E = 150 MPa, alpha = 1 and at E = 5 MPa, alpha = 5.48; -32.6 % at
+    E = 5 MPa, alpha = 1.)"""
     def front(youngs_modulus, alpha):
-        data = yaml.safe_load(yaml.safe_dump(base))
+        data = small_collapse_data(end_time=0.3)
         data["material"]["youngs_modulus"] = youngs_modulus
         data["numerics"]["artificial_viscosity"]["alpha"] = alpha
         sim = Simulation(scene_from_dict(data, name="e_alpha"))
