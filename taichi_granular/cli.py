@@ -88,6 +88,9 @@ def cmd_validate(args) -> int:
     if args.case == "obstacle-flow":
         from .validation.cli import validate_obstacle_flow
         return validate_obstacle_flow(args)
+    if args.case == "element-tests":
+        from .validation.cli import validate_element_tests
+        return validate_element_tests(args)
     raise AssertionError(args.case)
 
 
@@ -147,7 +150,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("validate", help="run a validation case and print its errors")
     p.add_argument("case", choices=["inclined-plane", "column-collapse", "column-collapse-3d", "stake-rows",
-                                       "obstacle-flow"])
+                                       "obstacle-flow", "element-tests"])
     p.add_argument("--resolution", choices=["coarse", "paper"], default="coarse",
                    help="column-collapse-3d, stake-rows, obstacle-flow: the coarse CPU scenes or the paper's "
                         "resolution (GPU)")

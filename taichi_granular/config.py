@@ -214,7 +214,94 @@ class ElastoplasticMaterial:
         return self.density
 
 
-MATERIALS = {"mu_i": MuIMaterial, "elastoplastic": ElastoplasticMaterial}
+# The parameter tables of [P] (MODEL.md section 2): c1..c4, e_min, (p1, p2, p3), (q1, q2, q3),
+# k_v, alpha_i. p3 and q3 in 1/kPa. The annular shear cell takes k_v from its solid fraction.
+HYPOPLASTIC_PARAMETER_SETS = {
+    "set1": dict(constants=(-50.0, -629.6, -629.6, 1220.8), min_void_ratio=0.597,
+                 critical_void_ratio=(0.53, 0.45, -0.0018), density_exponent=(1.0, -0.4, -0.0001),
+                 bagnold_coefficient=0.01, dispersion_angle_deg=35.0),
+    "set2": dict(constants=(-66.7, -832.9, -832.9, 1594.5), min_void_ratio=0.597,
+                 critical_void_ratio=(0.53, 0.45, -0.0011), density_exponent=(1.0, -0.4, -0.0001),
+                 bagnold_coefficient=0.1, dispersion_angle_deg=33.0),
+    "annular": dict(constants=(-50.0, -746.6, -746.6, 1855.1), min_void_ratio=0.563,
+                    critical_void_ratio=(0.65, 0.55, -0.11), density_exponent=(1.0, -0.24, -0.013),
+                    bagnold_coefficient=None, dispersion_angle_deg=27.0),
+}
+
+
+@dataclass(frozen=True, kw_only=True)
+class HypoplasticMaterial:
+    """Unified hypoplastic + Bagnold model of Peng et al. (2016), MODEL.md section 2.
+
+    ``parameter_set`` fills every constant from a [P] table (set1: simple shear; set2: incline,
+    drum, pile; annular: the shear cell); a constant given explicitly overrides the table."""
+
+    model: Literal["hypoplastic"] = _key("constitutive model")
+    parameter_set: Optional[Literal["set1", "set2", "annular"]] = _key(
+        "a parameter table of [P] supplying the constants below (set1, set2, annular)", None)
+    grain_density: float = _key("rho_s, density of the grain material", unit="kg/m^3")
+    grain_diameter: float = _key("d, grain diameter of the Bagnold stress", unit="m")
+    initial_void_ratio: float = _key("e_0, void ratio at t = 0 (bulk density rho_s/(1 + e_0))", unit="-")
+    constants: Optional[Tuple[float, ...]] = _key("c1, c2, c3, c4 of the Wu-Bauer-Kolymbas rate law", None, "-")
+    min_void_ratio: Optional[float] = _key("e_min of D_c = (e - e_min)/(e_crt - e_min)", None, "-")
+    critical_void_ratio: Optional[Tuple[float, ...]] = _key(
+        "p1, p2, p3 of e_crt = p1 + p2 exp(p3 |tr T_s|), |tr T_s| in kPa, p3 in 1/kPa", None)
+    density_exponent: Optional[Tuple[float, ...]] = _key(
+        "q1, q2, q3 of a = q1 + q2 exp(q3 |tr T_s|) in I_e = (1 - a) D_c + a, q3 in 1/kPa", None)
+    bagnold_coefficient: Optional[float] = _key("k_v of the collisional (Bagnold) stress", None, "-")
+    dispersion_angle_deg: Optional[float] = _key(
+        "alpha_i, p_v = tau_v/tan(alpha_i) of the Bagnold stress", None, "deg")
+    wave_speed: float = _key("c of the time step dt = chi h/c (chi: numerics.cfl) and of the artificial "
+                             "viscosity [P]", 80.0, "m/s")
+    tension_guard: float = _key("eps: where tr T_s > -eps, T_s is reset to -(eps/3) I (choice, MODEL.md section 2)",
+                                1.0, "Pa")
+
+    def __post_init__(self):
+        if self.parameter_set is not None:
+            for key, value in HYPOPLASTIC_PARAMETER_SETS[self.parameter_set].items():
+                if getattr(self, key) is None:
+                    object.__setattr__(self, key, value)
+
+    def check(self, path: str) -> None:
+        for key in ("constants", "min_void_ratio", "critical_void_ratio", "density_exponent",
+                    "bagnold_coefficient", "dispersion_angle_deg"):
+            if getattr(self, key) is None:
+                raise ConfigError(f"{path}.{key}", "missing: give it, or a parameter_set that supplies it")
+        for key, n in (("constants", 4), ("critical_void_ratio", 3), ("density_exponent", 3)):
+            if len(getattr(self, key)) != n:
+                raise ConfigError(f"{path}.{key}", f"expected {n} numbers, got {len(getattr(self, key))}")
+        _positive(f"{path}.grain_density", self.grain_density)
+        if not 100.0 <= self.grain_density <= 25000.0:
+            raise ConfigError(f"{path}.grain_density", f"{self.grain_density} is not a plausible grain density in kg/m^3")
+        _positive(f"{path}.grain_diameter", self.grain_diameter)
+        if self.grain_diameter > 0.05:
+            raise ConfigError(f"{path}.grain_diameter",
+                              f"{self.grain_diameter} m is not a grain; give it in metres (3 mm = 3e-3)")
+        _positive(f"{path}.min_void_ratio", self.min_void_ratio)
+        if not self.initial_void_ratio > self.min_void_ratio:
+            raise ConfigError(f"{path}.initial_void_ratio",
+                              f"e_0 = {self.initial_void_ratio} must exceed e_min = {self.min_void_ratio}")
+        p1, p2, p3 = self.critical_void_ratio
+        if p3 > 0.0 or self.density_exponent[2] > 0.0:
+            raise ConfigError(f"{path}.critical_void_ratio" if p3 > 0.0 else f"{path}.density_exponent",
+                              "the exponent (third number, 1/kPa) must be <= 0: e_crt and a fall with pressure")
+        if not p1 + p2 > self.min_void_ratio:
+            raise ConfigError(f"{path}.critical_void_ratio", "e_crt at zero stress (p1 + p2) must exceed e_min")
+        if not (self.bagnold_coefficient >= 0.0 and math.isfinite(self.bagnold_coefficient)):
+            raise ConfigError(f"{path}.bagnold_coefficient", f"must be >= 0, got {self.bagnold_coefficient}")
+        if not 0.0 < self.dispersion_angle_deg < 90.0:
+            raise ConfigError(f"{path}.dispersion_angle_deg",
+                              f"angle {self.dispersion_angle_deg} must lie in (0, 90) degrees (not radians)")
+        _positive(f"{path}.tension_guard", self.tension_guard, "must be > 0 (a few Pa)")
+        _positive(f"{path}.wave_speed", self.wave_speed)
+
+    @property
+    def reference_density(self) -> float:
+        """Bulk density at the initial void ratio, rho_s/(1 + e_0)  [kg/m^3]."""
+        return self.grain_density / (1.0 + self.initial_void_ratio)
+
+
+MATERIALS = {"mu_i": MuIMaterial, "elastoplastic": ElastoplasticMaterial, "hypoplastic": HypoplasticMaterial}
 
 
 class AnyMaterial:

@@ -16,7 +16,8 @@ SCOPES = ("all", "material", "wall")
 
 @dataclass(frozen=True)
 class FieldSpec:
-    """A per-particle field: name, shape ('scalar' | 'vector' | 'matrix'), meaning and unit.
+    """A per-particle field: name, shape ('scalar' | 'vector' | 'matrix' (dim x dim) |
+    'tensor3' (3 x 3 in 2D too: a plane-strain stress keeps its out-of-plane part)), meaning, unit.
 
     scope 'all' spans every particle, 'material' only material particles, 'wall' only
     boundary particles (indexed j - n_material).
@@ -30,7 +31,7 @@ class FieldSpec:
     dtype: str = "float"
 
     def components(self, dim: int) -> int:
-        return {"scalar": 1, "vector": dim, "matrix": dim * dim}[self.shape]
+        return {"scalar": 1, "vector": dim, "matrix": dim * dim, "tensor3": 9}[self.shape]
 
 
 # Every scheme has these.
@@ -82,6 +83,8 @@ class ParticleState:
                 f = ti.field(dtype, n)
             elif spec.shape == "vector":
                 f = ti.Vector.field(dim, dtype, n)
+            elif spec.shape == "tensor3":
+                f = ti.Matrix.field(3, 3, dtype, n)
             else:
                 f = ti.Matrix.field(dim, dim, dtype, n)
             setattr(self, spec.name, f)

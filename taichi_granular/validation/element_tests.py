@@ -1,0 +1,256 @@
+"""Element tests of the hypoplastic + Bagnold law (MODEL.md section 2) on a patch of particles.
+
+A cube of particles (3D lattice) is given the velocity v = L x of a uniform velocity gradient
+L at every step. The package's own stages then do the work: kernel gradient renormalisation
+and the SPH velocity gradient [M31] (which the correction makes exact for this linear field),
+the hypoplastic stress rate, the predictor-corrector update of T_s [P] and the tension guard.
+Positions stay where they are: the deformation is homogeneous, so the stress does not depend
+on where the particles sit, and a patch sheared to a strain of 5 would have no interior left.
+Results are read on the interior particles (full kernel support).
+
+Cases, with their references (MODEL.md section 2):
+- isochoric triaxial compression, L = rate diag(-1, 1/2, 1/2), set 1: stationary state at
+  I_e = 1.000 with sigma_1/sigma_3 = 2.454;
+- undrained (isochoric) simple shear, v_x = rate z, set 1: stationary at I_e = 0.912 with
+  tau/sigma_n = 0.491;
+- the annular shear cell, v_x = 2 kappa z with kappa = 10 1/s for 0.5 s, its own parameter set
+  and four solid fractions C (e = 1/C - 1): residual frictional stress zero for C <= 0.504,
+  non-zero for C = 0.524 (sigma_xz = 36.5 Pa, sigma_zz = 83.2 Pa in [P]). The ramp of kappa
+  to 500 1/s over 20 s (10^4 of strain) is not run: T_s is rate independent (the law is
+  homogeneous of degree one in D), so it stays at its stationary value, and the total stress
+  along the ramp is reported at a few kappa with the Bagnold part from the same D.
+
+Starting states (our choice): isotropic, 1 kPa for set 1, 100 Pa in the shear cell; initial
+void ratios chosen so that the stress climbs to the stationary state from slightly below it
+(e_crt falls with pressure, which makes the stationary state an attractor):
+triaxial e_0 = 0.968 (e_crt at |tr T| = 15 kPa), simple shear e_0 = 0.886.
+"""
+import math
+from dataclasses import dataclass, field
+from typing import List, Optional
+
+import numpy as np
+import taichi as ti
+
+from .. import runtime
+from ..config import scene_from_dict
+
+ANNULAR_SOLID_FRACTIONS = (0.461, 0.483, 0.504, 0.524)
+ANNULAR_BAGNOLD = {0.461: 0.0018, 0.483: 0.0027, 0.504: 0.0041, 0.524: 0.0065}  # k_v per C [P]
+ANNULAR_REFERENCE = {"sigma_xz": 36.5, "sigma_zz": 83.2}  # Pa, C = 0.524 [P]
+STATIONARY_GROWTH = 0.05  # |d ln|T_s| / d strain| below this: stationary
+
+
+def patch_scene(parameter_set: str, void_ratio: float, bagnold_coefficient: Optional[float] = None,
+                particles_per_side: int = 8, spacing: float = 1e-3, smoothing_function: str = "wendland_c6"):
+    """A 3D cube of particles of the hypoplastic material, no walls, no gravity."""
+    half = 0.5 * particles_per_side * spacing
+    material = {"model": "hypoplastic", "parameter_set": parameter_set, "grain_density": 2650.0,
+                "grain_diameter": 1e-3, "initial_void_ratio": void_ratio}
+    if bagnold_coefficient is not None:
+        material["bagnold_coefficient"] = bagnold_coefficient
+    return scene_from_dict({
+        "name": f"element_test_{parameter_set}", "dimension": 3,
+        "domain": {"lower": [-2 * half] * 3, "upper": [2 * half] * 3},
+        "gravity": {"magnitude": 0.0},
+        "material": material,
+        "particles": [{"lower": [-half] * 3, "upper": [half] * 3, "initial_stress": "zero"}],
+        "numerics": {"particle_spacing": spacing, "smoothing_function": smoothing_function,
+                     "gradient_correction": "matrix", "integrator": "predictor_corrector", "cfl": 0.05},
+        "run": {"end_time": 1.0, "output_interval": 1.0},
+    })
+
+
+@ti.data_oriented
+class ElementTest:
+    """A patch under a prescribed uniform velocity gradient, advanced by the package's stages."""
+
+    def __init__(self, scene, initial_pressure: float):
+        from ..physics.gradient_correction import GradientCorrection
+        from ..physics.rheology.hypoplastic import FrictionalStressRate, TensionGuard, TotalStress
+        from ..physics.strain_rate import StrainRate
+        from ..scheme import Scheme
+
+        self.scheme = Scheme(scene)
+        by_class = {type(s): s for s in self.scheme.rate_stages + self.scheme.position_stages}
+        self.neighbours = self.scheme.rate_stages[0]
+        self.correction = by_class[GradientCorrection]
+        self.strain_rate, self.stress_rate = by_class[StrainRate], by_class[FrictionalStressRate]
+        self.total, self.guard = by_class[TotalStress], by_class[TensionGuard]
+        self.state = self.scheme.state
+        self.model = self.scheme.model
+        n = self.state.n_material
+        self.state.frictional_stress.from_numpy(np.tile(-initial_pressure * np.eye(3), (n, 1, 1)))
+        self.neighbours.run()
+        self.correction.run()
+        x = self.state.position.to_numpy()[:n]
+        reach = 2.0 * scene.numerics.smoothing_length
+        lo, hi = x.min(axis=0) + reach - 1e-12, x.max(axis=0) - reach + 1e-12
+        self.interior = np.where(np.all((x >= lo) & (x <= hi), axis=1))[0]
+        if len(self.interior) == 0:
+            raise ValueError("the patch has no particle with full kernel support; give it more particles")
+        self.strain = 0.0
+
+    @ti.kernel
+    def impose(self, velocity_gradient: ti.types.matrix(3, 3, float)):
+        """v = L x on every particle of the patch."""
+        ti.loop_config(serialize=runtime.serial_loops)
+        for i in range(self.state.n_material):
+            self.state.velocity[i] = velocity_gradient @ self.state.position[i]
+
+    @ti.kernel
+    def update(self, dt: float, predictor: ti.i32):
+        """T_s(1/2) = T_s + dt/2 rate(n); T_s(n+1) = T_s(n) + dt rate(1/2)  [P]."""
+        ti.loop_config(serialize=runtime.serial_loops)
+        for i in range(self.state.n_material):
+            if predictor:
+                self.state.frictional_stress_start[i] = self.state.frictional_stress[i]
+                self.state.frictional_stress[i] += 0.5 * dt * self.state.frictional_stress_rate[i]
+            else:
+                self.state.frictional_stress[i] = self.state.frictional_stress_start[i] + \
+                    dt * self.state.frictional_stress_rate[i]
+
+    def advance(self, velocity_gradient: np.ndarray, dt: float) -> None:
+        """One predictor-corrector step of T_s under L."""
+        self.impose(ti.Matrix(velocity_gradient))
+        self.strain_rate.run()
+        for predictor in (1, 0):
+            self.stress_rate.run()
+            self.update(dt, predictor)
+            self.guard.run()
+        D = 0.5 * (velocity_gradient + velocity_gradient.T)
+        self.strain += math.sqrt(2.0 / 3.0 * float(np.sum(D * D))) * dt  # equivalent strain
+
+    def readings(self) -> dict:
+        """Interior means: frictional stress T_s, total stress T (with Bagnold), I_e, the gradient error."""
+        self.total.run()
+        self.stress_rate.run()
+        idx = self.interior
+        T_s = self.state.frictional_stress.to_numpy()[idx].mean(axis=0)
+        rate = self.state.frictional_stress_rate.to_numpy()[idx].mean(axis=0)
+        p = self.state.pressure.to_numpy()[idx].mean()
+        s = self.state.deviatoric_stress.to_numpy()[idx].mean(axis=0)
+        grad = self.state.velocity_gradient.to_numpy()[idx]
+        return {"frictional_stress": T_s, "total_stress": s - p * np.eye(3), "rate": rate,
+                "density_factor": float(self.state.density_factor.to_numpy()[idx].mean()),
+                "velocity_gradient": grad.mean(axis=0), "gradient_spread": float(np.ptp(grad, axis=0).max())}
+
+
+def relative_growth(T: np.ndarray, rate: np.ndarray, strain_rate: float) -> float:
+    """d ln|T| / d strain: zero at a stationary state  [-]."""
+    return float(np.sum(T * rate) / np.sum(T * T)) / strain_rate
+
+
+@dataclass
+class StationaryResult:
+    name: str
+    reference_ratio: float
+    reference_factor: float
+    tolerance: float
+    ratio: float = 0.0
+    density_factor: float = 0.0
+    growth: float = 0.0
+    strain: float = 0.0
+    gradient_error: float = 0.0
+
+    @property
+    def ratio_error(self) -> float:
+        return self.ratio / self.reference_ratio - 1.0
+
+    @property
+    def stationary(self) -> bool:
+        return abs(self.growth) < STATIONARY_GROWTH
+
+    @property
+    def passed(self) -> bool:
+        return self.stationary and abs(self.ratio_error) < self.tolerance and \
+            abs(self.density_factor - self.reference_factor) < 0.0015
+
+    def row(self) -> str:
+        return (f"{self.name:14s} {self.ratio:8.4f} {self.reference_ratio:8.3f} {100 * self.ratio_error:+7.2f} % "
+                f"{self.density_factor:7.4f} {self.reference_factor:6.3f} {self.growth:+8.4f} {self.strain:6.2f} "
+                f"{self.gradient_error:9.2e}  {'PASS' if self.passed else 'FAIL'}")
+
+
+STATIONARY_HEADER = ("case              ratio  ref      error     I_e    ref    d ln|T|/de strain  grad err  "
+                     "(ratio: sigma_1/sigma_3 triaxial, tau/sigma_n shear)")
+
+
+def _run_stationary(kind: str, strain: float, strain_step: float, particles_per_side: int) -> StationaryResult:
+    rate = 1.0  # 1/s; the law is rate independent, only strain counts
+    if kind == "triaxial":
+        L = rate * np.diag([-1.0, 0.5, 0.5])
+        result = StationaryResult("triaxial", 2.454, 1.000, 0.01)
+        void_ratio = 0.968
+    else:
+        L = np.zeros((3, 3))
+        L[0, 2] = rate
+        result = StationaryResult("simple_shear", 0.491, 0.912, 0.02)
+        void_ratio = 0.886
+    test = ElementTest(patch_scene("set1", void_ratio, particles_per_side=particles_per_side), 1e3)
+    D = 0.5 * (L + L.T)
+    eq_rate = math.sqrt(2.0 / 3.0 * float(np.sum(D * D)))
+    dt = strain_step / eq_rate
+    while test.strain < strain - 1e-12:
+        test.advance(L, dt)
+    r = test.readings()
+    T = r["frictional_stress"]
+    if kind == "triaxial":
+        result.ratio = T[0, 0] / T[1, 1]
+    else:
+        result.ratio = T[0, 2] / -T[2, 2]
+    result.density_factor = r["density_factor"]
+    result.growth = relative_growth(T, r["rate"], eq_rate)
+    result.strain = test.strain
+    result.gradient_error = float(np.abs(r["velocity_gradient"] - L).max()) / rate
+    return result
+
+
+def stationary_states(strain: float = 4.0, strain_step: float = 2e-4, particles_per_side: int = 8):
+    """The triaxial and simple-shear stationary states of set 1 (MODEL.md section 2)."""
+    return [_run_stationary(kind, strain, strain_step, particles_per_side) for kind in ("triaxial", "simple_shear")]
+
+
+@dataclass
+class AnnularResult:
+    solid_fraction: float
+    void_ratio: float
+    sigma_xz: float
+    sigma_zz: float
+    density_factor: float
+    ramp: List[tuple] = field(default_factory=list)  # (kappa, total sigma_xz, total sigma_zz)
+
+    @property
+    def residual(self) -> bool:
+        return abs(self.sigma_xz) > 1.0
+
+    def row(self) -> str:
+        ramp = "  ".join(f"k={k:.0f}: {xz:.3g}/{zz:.3g}" for k, xz, zz in self.ramp)
+        return (f"C = {self.solid_fraction:.3f}  e = {self.void_ratio:.3f}  frictional sigma_xz {self.sigma_xz:7.2f} Pa  "
+                f"sigma_zz {self.sigma_zz:7.2f} Pa  I_e {self.density_factor:.4f}   total xz/zz {ramp}")
+
+
+def annular_shear_cell(solid_fraction: float, duration: float = 0.5, strain_step: float = 2e-4,
+                       particles_per_side: int = 8, ramp_kappas=(10.0, 100.0, 500.0)) -> AnnularResult:
+    """v_x = 2 kappa z, kappa = 10 1/s for ``duration``; then T at a few kappa of the ramp."""
+    void_ratio = 1.0 / solid_fraction - 1.0
+    test = ElementTest(patch_scene("annular", void_ratio, ANNULAR_BAGNOLD[solid_fraction],
+                                   particles_per_side=particles_per_side), 100.0)
+    kappa = 10.0
+    L = np.zeros((3, 3))
+    L[0, 2] = 2.0 * kappa
+    dt = strain_step / L[0, 2]
+    steps = int(round(duration / dt))
+    for _ in range(steps):
+        test.advance(L, dt)
+    r = test.readings()
+    T = r["frictional_stress"]
+    result = AnnularResult(solid_fraction, void_ratio, T[0, 2], -T[2, 2], r["density_factor"])
+    for k in ramp_kappas:  # the total stress at kappa: the same T_s, Bagnold from the new D
+        L = np.zeros((3, 3))
+        L[0, 2] = 2.0 * k
+        test.impose(ti.Matrix(L))
+        test.strain_rate.run()
+        total = test.readings()["total_stress"]
+        result.ramp.append((k, total[0, 2], -total[2, 2]))
+    return result
