@@ -375,14 +375,18 @@ class Wall:
     ``dynamic`` ([A], Dalrymple & Knio 2001): fixed boundary particles behind the plane whose
     density follows the continuity equation and whose pressure the equation of state; rows are
     staggered by dp/2 along the wall so that no gap lines up.
+    ``extrapolated`` ([P], MODEL.md section 2): boundary particles on the lattice behind the plane
+    whose velocity (no slip) and stress (Shepard average with a hydrostatic correction) are
+    extrapolated from the material at every rate evaluation.
     """
 
     normal: Tuple[float, ...] = _key("unit normal of the plane, pointing into the material")
     point: Tuple[float, ...] = _key("a point on the plane", unit="m")
     name: str = _key("label used in messages", "wall")
-    type: Literal["ghost", "dynamic"] = _key(
-        "boundary model: ghost (mu(I), [M34]-[M36]) or dynamic (boundary particles that obey continuity and "
-        "the equation of state, Dalrymple & Knio 2001, as in [A])", "ghost")
+    type: Literal["ghost", "dynamic", "extrapolated"] = _key(
+        "boundary model: ghost (mu(I), [M34]-[M36]), dynamic (boundary particles that obey continuity and "
+        "the equation of state, Dalrymple & Knio 2001, as in [A]) or extrapolated (boundary particles whose "
+        "velocity and stress are extrapolated from the material, as in [P])", "ghost")
     lower: Optional[Tuple[float, ...]] = _key("lower corner of the box that clips the wall (default domain)", None, "m")
     upper: Optional[Tuple[float, ...]] = _key("upper corner of the box that clips the wall (default domain)", None, "m")
     max_velocity_factor: float = _key(
@@ -804,6 +808,13 @@ class Scene:
             if self.material.model == "mu_i":
                 raise ConfigError(f"obstacles[{k}]", "the mu(I) model of [M] uses ghost walls [M34]-[M36]; "
                                                      "obstacles are dynamic boundary particles")
+        for k, wall in enumerate(self.walls):
+            if (self.material.model == "hypoplastic") != (wall.type == "extrapolated"):
+                raise ConfigError(f"walls[{k}].type", "the hypoplastic model of [P] uses extrapolated walls, and "
+                                                      "extrapolated walls need its stress (MODEL.md section 2)")
+        if self.material.model == "hypoplastic" and self.obstacles:
+            raise ConfigError("obstacles", "obstacles are dynamic boundary particles, which need an equation of "
+                                           "state; the hypoplastic model uses extrapolated walls")
         if self.material.model == "mu_i" and self.numerics.artificial_stress.enabled:
             raise ConfigError("numerics.artificial_stress.epsilon", "the tensile instability correction needs a "
                                                                     "stress tensor model (elastoplastic); set it to 0")

@@ -44,7 +44,11 @@ def rate_stage_classes(scene: Scene, model) -> List[type]:
         classes.append(FreeSurface)
     walls_cls = boundary_class(scene)
     classes += getattr(walls_cls, "stage_classes", lambda s: [])(scene)
-    classes += model.stage_classes(scene)
+    model_classes = model.stage_classes(scene)
+    # boundary stresses extrapolated from the material's: after its stress, before the first force
+    first_force = next((k for k, c in enumerate(model_classes) if c.category == "forces"), len(model_classes))
+    classes += model_classes[:first_force] + getattr(walls_cls, "stress_stage_classes", lambda s: [])(scene) + \
+        model_classes[first_force:]
     if scene.numerics.artificial_viscosity.enabled:
         classes.append(ArtificialViscosity)
     if scene.numerics.artificial_stress.enabled:
@@ -74,8 +78,9 @@ class Scheme:
         runtime.choose_loops(ini.n_total)
         self.state = ParticleState(scene.dimension, ini.n_material, ini.n_wall, specs)
         wall_fields = {k: v for k, v in ini.wall_fields.items() if self.state.has(k)}
+        model_fields = model.initial_fields(ini) if hasattr(model, "initial_fields") else {}
         self.state.load({"position": ini.position, "velocity": ini.velocity, "mass": ini.mass,
-                         "density": ini.density, "pressure": ini.pressure, **wall_fields})
+                         "density": ini.density, "pressure": ini.pressure, **wall_fields, **model_fields})
         model.state = self.state
         self.model = model
         self.smoothing = make_smoothing(scene.numerics.smoothing_function, scene.numerics.smoothing_length, scene.dimension)

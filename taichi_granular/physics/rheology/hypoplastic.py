@@ -140,9 +140,10 @@ class HypoplasticBagnold:
 
     @ti.func
     def deviatoric_stress(self, k):
-        """s of the total stress of particle k (its in-plane part); boundary particles carry none  [Pa]."""
+        """s of the total stress of particle k (its in-plane part); boundary particles carry one only
+        where the wall model gives them one (extrapolated walls)  [Pa]."""
         s = ti.Matrix.zero(float, self.dim, self.dim)
-        if k < self.state.n_material:
+        if k < self.state.deviatoric_stress.shape[0]:
             s = self.state.deviatoric_stress[k]
         return s
 
@@ -171,6 +172,12 @@ class HypoplasticBagnold:
     def initial_density(self, pressure: np.ndarray) -> np.ndarray:
         """The density of the initial void ratio, whatever the stress (grains are rigid here)  [kg/m^3]."""
         return np.full(np.shape(pressure), self.reference_density())
+
+    def initial_fields(self, initial) -> dict:
+        """T_s at t = 0: isotropic, -p I with the block's hydrostatic pressure p (our choice: K0 = 1),
+        at least the tension guard's -(eps/3) I  [Pa]."""
+        p = np.maximum(initial.pressure[: initial.n_material], self.guard / 3.0)
+        return {"frictional_stress": -p[:, None, None] * np.eye(3)[None]}
 
     def derived_output(self, arrays: dict) -> dict:
         """Void ratio e = rho_s/rho - 1."""

@@ -9,8 +9,9 @@
 - ``stages``: the per-step stages the model needs (none for fixed ghosts).
 """
 from .dynamic import DynamicWalls
+from .extrapolated import ExtrapolatedWalls
 from .ghost import GhostWalls, NoWalls
 
-BOUNDARIES = {"ghost": GhostWalls, "dynamic": DynamicWalls}
+BOUNDARIES = {"ghost": GhostWalls, "dynamic": DynamicWalls, "extrapolated": ExtrapolatedWalls}
 
-__all__ = ["BOUNDARIES", "DynamicWalls", "GhostWalls", "NoWalls"]
+__all__ = ["BOUNDARIES", "DynamicWalls", "ExtrapolatedWalls", "GhostWalls", "NoWalls"]

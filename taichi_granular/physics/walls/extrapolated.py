@@ -1,0 +1,136 @@
+"""Boundary particles with extrapolated state, Peng et al.'s improved wall treatment
+(MODEL.md section 2).
+
+Boundary particles sit on a lattice behind the wall (as many rows as the kernel support needs)
+and carry, at every rate evaluation, a state extrapolated from the material around them:
+
+- velocity, no slip: v_w = 2 v_wall - sum_f v_f W_wf / sum_f W_wf, so that the velocity
+  interpolated across the wall vanishes relative to the wall;
+- stress, a Shepard average with the hydrostatic correction on the diagonal,
+      sigma_w = [sum_f sigma_f W_wf V_f - diag(rho_f g (x_w - x_f)) W_wf V_f] / sum_f W_wf V_f,
+  one gravity component per diagonal entry (written here with the package's sigma = -p I + s,
+  the same stress as the tension-positive T of MODEL.md): a wall under a layer at rest then
+  carries the layer's stress continued below the surface, and the momentum equation [A12]
+  of the first rows sees a full, hydrostatic neighbourhood;
+- density, the Shepard average of the material's, sum_f m_f W_wf / sum_f W_wf V_f.
+
+The stress is stored as p_w = -tr(sigma_w)/d and s_w = sigma_w + p_w I, so that every pair
+term that builds sigma_j = s_j - p_j I sees sigma_w. A boundary particle with no material in
+reach carries zero stress, the wall's velocity and the reference density.
+
+The velocity is extrapolated before the material's rates (continuity and velocity gradient see
+the no-slip wall), the stress after the material's stress and before the momentum equation.
+Walls that move (the rotating drum) carry their prescribed velocity in ``wall_velocity``.
+"""
+import taichi as ti
+
+from ... import runtime
+
+from ...state import FieldSpec
+from ..stage import Stage
+from .ghost import NoWalls
+
+EXTRAPOLATED_FIELDS = (
+    FieldSpec("wall_velocity", "vector", "v_wall, the prescribed velocity of the wall at the particle", "m/s",
+              "wall"),
+    # boundary particles carry a deviatoric stress of their own
+    FieldSpec("deviatoric_stress", "matrix", "s of the total stress (boundary particles: extrapolated)", "Pa",
+              "all"),
+)
+
+
+@ti.data_oriented
+class ExtrapolatedWalls(NoWalls):
+    name = "extrapolated"
+    fields = EXTRAPOLATED_FIELDS
+
+    @classmethod
+    def position_stage_classes(cls):
+        return []
+
+    @classmethod
+    def stage_classes(cls, scene):
+        return [WallVelocityExtrapolation]
+
+    @classmethod
+    def stress_stage_classes(cls, scene):
+        return [WallStressExtrapolation]
+
+
+@ti.data_oriented
+class WallVelocityExtrapolation(Stage):
+    """v_w = 2 v_wall - sum_f v_f W_wf / sum_f W_wf (no slip) [P]."""
+
+    name = "wall_velocity_extrapolation"
+    category = "walls"
+    equation = "[P] improved wall"
+
+    def __init__(self, ctx):
+        super().__init__(ctx)
+        self.dim = ctx.state.dim
+
+    @ti.func
+    def pair(self, w, f, x_wf, r, acc: ti.template()):
+        weight = self.smoothing.value(r)
+        acc[self.dim] += weight
+        for a in ti.static(range(self.dim)):
+            acc[a] += weight * self.state.velocity[f][a]
+
+    @ti.kernel
+    def _run(self):
+        ti.loop_config(serialize=runtime.serial_loops)
+        for k in range(self.state.n_wall):
+            w = self.state.n_material + k
+            acc = ti.Vector.zero(float, self.dim + 1)
+            self.grid.for_each_material_neighbor(w, self.pair, acc)
+            v = self.state.wall_velocity[k]
+            if acc[self.dim] > 0.0:
+                mean = ti.Vector([acc[a] for a in ti.static(range(self.dim))]) / acc[self.dim]
+                v = 2.0 * v - mean
+            self.state.velocity[w] = v
+
+
+@ti.data_oriented
+class WallStressExtrapolation(Stage):
+    """sigma_w and rho_w as Shepard averages of the material, with the hydrostatic correction [P]."""
+
+    name = "wall_stress_extrapolation"
+    category = "walls"
+    equation = "[P] improved wall"
+
+    def __init__(self, ctx):
+        super().__init__(ctx)
+        self.dim = ctx.state.dim
+        self.gravity = ti.Vector(ctx.scene.gravity_vector)
+        self.reference_density = ctx.model.reference_density()
+
+    @ti.func
+    def pair(self, w, f, x_wf, r, acc: ti.template()):
+        """acc rows 0..d-1: sum sigma W V - diag(rho g x_wf) W V; row d: [sum W V, sum m W, 0...]."""
+        s = self.state
+        volume_weight = self.smoothing.value(r) * s.mass[f] / s.density[f]
+        sigma = self.model.deviatoric_stress(f) - s.pressure[f] * ti.Matrix.identity(float, self.dim)
+        for a in ti.static(range(self.dim)):
+            sigma[a, a] -= s.density[f] * self.gravity[a] * x_wf[a]  # x_wf = x_w - x_f
+        for a, b in ti.static(ti.ndrange(self.dim, self.dim)):
+            acc[a, b] += sigma[a, b] * volume_weight
+        acc[self.dim, 0] += volume_weight
+        acc[self.dim, 1] += self.smoothing.value(r) * s.mass[f]
+
+    @ti.kernel
+    def _run(self):
+        ti.loop_config(serialize=runtime.serial_loops)
+        for k in range(self.state.n_wall):
+            w = self.state.n_material + k
+            acc = ti.Matrix.zero(float, self.dim + 1, max(self.dim, 2))
+            self.grid.for_each_material_neighbor(w, self.pair, acc)
+            sigma = ti.Matrix.zero(float, self.dim, self.dim)
+            density = self.reference_density
+            if acc[self.dim, 0] > 0.0:
+                for a, b in ti.static(ti.ndrange(self.dim, self.dim)):
+                    sigma[a, b] = acc[a, b] / acc[self.dim, 0]
+                density = acc[self.dim, 1] / acc[self.dim, 0]
+            pressure = -sigma.trace() / self.dim
+            self.state.pressure[w] = pressure
+            self.state.deviatoric_stress[w] = sigma + pressure * ti.Matrix.identity(float, self.dim)
+            self.state.density[w] = density
