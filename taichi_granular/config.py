@@ -326,6 +326,8 @@ class ParticleBlock:
         "default: global coordinates)", None, "m")
     tilt_deg: float = _key("tilt of that frame about y (as obstacles: local x descends a slope of tilt_deg; the "
                            "hydrostatic pressure then acts along the local z axis)", 0.0, "deg")
+    clip_circle: Optional[Tuple[float, ...]] = _key(
+        "2D: [x, y, radius]: keep only the lattice points at least dp/2 inside this circle (a drum's fill)", None, "m")
 
     @property
     def framed(self) -> bool:
@@ -356,6 +358,10 @@ class ParticleBlock:
                 raise ConfigError(f"{path}.upper", f"a cylinder's box needs a square footprint, got {wx} x {wy} m")
         if self.velocity is not None:
             _check_vector(f"{path}.velocity", self.velocity, dim)
+        if self.clip_circle is not None:
+            if dim != 2 or len(self.clip_circle) != 3:
+                raise ConfigError(f"{path}.clip_circle", "a 2D scene's [x, y, radius]")
+            _positive(f"{path}.clip_circle[2]", self.clip_circle[2], "the radius must be > 0")
         for a in range(dim):
             if self.upper[a] - self.lower[a] < spacing * (1 - 1e-9):
                 raise ConfigError(f"{path}.upper", f"box thinner than one particle spacing along axis {AXES[a]}")
@@ -572,8 +578,34 @@ class MeshObstacle(_Obstacle):
             raise ConfigError(f"{path}.file", f"no such mesh file: {self.file}")
 
 
+@dataclass(frozen=True, kw_only=True)
+class DrumObstacle(_Obstacle):
+    """A rotating drum (2D): a circular wall of ``radius`` about ``origin``, its boundary particles
+    on rings outside the radius (as many as the kernel support needs), turning rigidly at
+    ``angular_velocity`` (counter-clockwise positive) from t = 0. Walls of the hypoplastic model
+    ([P]): extrapolated boundary particles carrying the drum's velocity."""
+
+    shape: Literal["drum"] = _key("obstacle kind", "drum")
+    radius: float = _key("inner radius R of the drum", unit="m")
+    angular_velocity: float = _key("omega, rotation rate, counter-clockwise positive (rad/s, not rpm)", unit="rad/s")
+    dimensions = (2,)
+
+    def check(self, path: str, dim: int) -> None:
+        super().check(path, dim)
+        self._positive_keys(path, "radius")
+        if not (math.isfinite(self.angular_velocity) and abs(self.angular_velocity) <= 100.0):
+            raise ConfigError(f"{path}.angular_velocity", f"{self.angular_velocity} rad/s is implausible (rad/s, "
+                                                          "not rpm: 1 rpm = 0.1047 rad/s)")
+        if self.tilt_deg != 0.0:
+            raise ConfigError(f"{path}.tilt_deg", "a drum is round: no tilt")
+        if self.friction_angle_deg is not None:
+            raise ConfigError(f"{path}.friction_angle_deg", "drum walls are extrapolated no-slip walls [P]: no "
+                                                            "Coulomb friction angle")
+
+
 OBSTACLES = {cls.__dataclass_fields__["shape"].default: cls
-             for cls in (ChuteObstacle, BoxObstacle, PostRowsObstacle, CylinderObstacle, WedgeObstacle, MeshObstacle)}
+             for cls in (ChuteObstacle, BoxObstacle, PostRowsObstacle, CylinderObstacle, WedgeObstacle, MeshObstacle,
+                         DrumObstacle)}
 
 
 class AnyObstacle:
@@ -802,7 +834,7 @@ class Scene:
                 raise ConfigError(f"walls[{k}].type", "the mu(I) model of [M] uses ghost walls [M34]-[M36]")
         for k, obstacle in enumerate(self.obstacles):
             obstacle.check(f"obstacles[{k}]", dim)
-            if any(w.type != "dynamic" for w in self.walls):
+            if self.material.model != "hypoplastic" and any(w.type != "dynamic" for w in self.walls):
                 raise ConfigError(f"obstacles[{k}]", "obstacles are dynamic boundary particles; every wall of the "
                                                      "scene must then be of type dynamic")
             if self.material.model == "mu_i":
@@ -812,9 +844,10 @@ class Scene:
             if (self.material.model == "hypoplastic") != (wall.type == "extrapolated"):
                 raise ConfigError(f"walls[{k}].type", "the hypoplastic model of [P] uses extrapolated walls, and "
                                                       "extrapolated walls need its stress (MODEL.md section 2)")
-        if self.material.model == "hypoplastic" and self.obstacles:
-            raise ConfigError("obstacles", "obstacles are dynamic boundary particles, which need an equation of "
-                                           "state; the hypoplastic model uses extrapolated walls")
+        for k, obstacle in enumerate(self.obstacles):
+            if (self.material.model == "hypoplastic") != (obstacle.shape == "drum"):
+                raise ConfigError(f"obstacles[{k}].shape", "the hypoplastic model's obstacle is the drum (extrapolated "
+                                                           "walls); the other obstacles are dynamic boundary particles")
         if self.material.model == "mu_i" and self.numerics.artificial_stress.enabled:
             raise ConfigError("numerics.artificial_stress.epsilon", "the tensile instability correction needs a "
                                                                     "stress tensor model (elastoplastic); set it to 0")

@@ -102,7 +102,7 @@ class SymplecticVerlet(_Update):
 
     def step(self, dt: float, scheme) -> None:
         scheme.profiler(self, self.half_step, dt)
-        scheme.after_move()
+        scheme.after_move(0.5)
         scheme.evaluate_rates()
         scheme.profiler(self, self.full_step, dt)
         scheme.after_move()
@@ -124,7 +124,7 @@ class PredictorCorrector(_Update):
     def step(self, dt: float, scheme) -> None:
         scheme.evaluate_rates()
         scheme.profiler(self, self.half_step, dt)
-        scheme.after_move()
+        scheme.after_move(0.5)
         scheme.evaluate_rates()
         scheme.profiler(self, self.full_step, dt)
         scheme.after_move()

@@ -29,7 +29,8 @@ from .config import ConfigError, Scene
 
 
 def boundary_class(scene: Scene):
-    types = sorted({w.type for w in scene.walls} | ({"dynamic"} if scene.obstacles else set()))
+    obstacle_type = "extrapolated" if scene.material.model == "hypoplastic" else "dynamic"
+    types = sorted({w.type for w in scene.walls} | ({obstacle_type} if scene.obstacles else set()))
     if not types:
         return NoWalls
     if len(types) > 1:
@@ -72,7 +73,8 @@ class Scheme:
         integrator_cls = INTEGRATORS[scene.numerics.integrator]
         gradient_cls = GRADIENTS[scene.numerics.gradient_correction]
         specs = merge_specs([model.fields, walls_cls.fields, integrator_cls.fields, gradient_cls.fields]
-                            + [cls.fields for cls in rate_classes + model.update_stage_classes()]
+                            + [cls.fields for cls in rate_classes + model.update_stage_classes()
+                               + walls_cls.position_stage_classes(scene)]
                             + ([Outflow.fields] if scene.domain.outflow else []))
         ini = self.initial
         runtime.choose_loops(ini.n_total)
@@ -88,14 +90,18 @@ class Scheme:
                                  scene.domain.periodic_mask, self.smoothing.support, n_moving=ini.n_material)
         self.walls = walls_cls(self.state, scene.gravity_vector)
         self.dt = ti.field(float, shape=())
+        self.time = ti.field(float, shape=())
+        self.step_fraction = ti.field(float, shape=())
+        self._step = (0.0, 0.0)  # (t, dt) of the step being taken
         ctx = Context(state=self.state, grid=self.grid, smoothing=self.smoothing, walls=self.walls,
-                      model=model, scene=scene, time_step=self.dt)
+                      model=model, scene=scene, time_step=self.dt, time=self.time,
+                      step_fraction=self.step_fraction)
         ctx.gradient = self.gradient = gradient_cls(ctx)
         self.rate_stages = [cls(ctx) for cls in rate_classes]
         self.integrator = integrator_cls(ctx)
         # after every update: walls act on the new positions, the model on the new state
         outflow = [Outflow] if scene.domain.outflow else []
-        self.position_stages = [cls(ctx) for cls in outflow + walls_cls.position_stage_classes()
+        self.position_stages = [cls(ctx) for cls in outflow + walls_cls.position_stage_classes(scene)
                                 + model.update_stage_classes()]
         self.time_step = StableTimeStep(ctx)
 
@@ -109,13 +115,24 @@ class Scheme:
         """Anything the integrator needs before its first step (initial rates)."""
         self.integrator.prepare(self.evaluate_rates)
 
-    def after_move(self) -> None:
-        """Stages that act on positions right after the integrator moves particles."""
+    def after_move(self, fraction: float = 1.0) -> None:
+        """Stages that act on positions right after the integrator moves particles to
+        t + fraction dt of the step being taken (moving walls go there too)."""
+        t, dt = self._step
+        self.time[None] = t + fraction * dt
+        self.step_fraction[None] = fraction
         for stage in self.position_stages:
             self.profiler(stage)
 
-    def step(self, dt: float) -> None:
+    def place(self, t: float) -> None:
+        """Position stages at time t without a step (a resumed run's loaded state)."""
+        self._step = (t, 0.0)
+        self.after_move()
+
+    def step(self, dt: float, t: float = 0.0) -> None:
+        """Advance from time t by dt."""
         self.dt[None] = dt  # stages that act over one step (wall friction) read it
+        self._step = (t, dt)
         self.integrator.step(dt, self)
 
     def stable_time_step(self) -> float:

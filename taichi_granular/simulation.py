@@ -140,7 +140,7 @@ class Simulation:
         self.frame_index = int(counters["frame"]) + 1  # the checkpoint was taken at that frame
         self.peak_kinetic_energy = float(counters["peak_kinetic_energy"])
         self.output.reopen(self.t)
-        self.scheme.after_move()  # neighbour grid of the loaded positions
+        self.scheme.place(self.t)  # neighbour grid (and moving walls) of the loaded state
 
     def at_rest(self) -> bool:
         """run.stop_at_rest: kinetic energy below that fraction of its peak so far."""
@@ -174,7 +174,7 @@ class Simulation:
                 raise SimulationError(f"step {self.step_count}, t = {self.t:.6g} s: stable time step "
                                       f"{self.dt:.3g} s fell below numerics.min_time_step = {min_dt:.3g} s")
             dt = min(self.dt, next_output - self.t, end_time - self.t)
-            self.scheme.step(dt)
+            self.scheme.step(dt, self.t)
             self.step_count += 1
             self.t += dt
             self._check("after the step")

@@ -238,3 +238,33 @@ def test_extrapolated_wall_holds_a_layer_at_rest_with_hydrostatic_stress():
     for k in range(rows.max() - 1):
         m = rows == k
         assert -T_yy[m].mean() == pytest.approx(hydrostatic[m].mean(), rel=0.08), k
+
+
+def test_coarse_drum_turns_two_revolutions_without_a_grain_leaving_it():
+    """The drum scene of configs/ shrunk to R = 5 cm (dp 7.5 mm, 50 grains, omega = 2 pi rad/s,
+    c = 40 m/s): two revolutions with no grain reaching the wall, i.e. the impermeability
+    safeguard never acts (measured 0 corrections; without artificial viscosity and without the
+    wall's tension cut-off the same drum threw grains through its wall within half a revolution),
+    the wall back where it started, and the bed turning with the drum."""
+    from taichi_granular.config import load_scene
+    from taichi_granular.paths import config_path
+    from taichi_granular.simulation import Simulation
+
+    R = 0.05
+    scene = load_scene(config_path("hypoplastic/drum_omega1.yaml"), [
+        f"obstacles.0.radius={R}", f"particles.0.lower=[-{R},-{R}]", f"particles.0.upper=[{R},0.0]",
+        f"particles.0.clip_circle=[0.0,0.0,{R}]", "domain.lower=[-0.08,-0.08]", "domain.upper=[0.08,0.08]",
+        f"obstacles.0.angular_velocity={2 * math.pi}", "material.wave_speed=40.0", "numerics.particle_spacing=0.0075",
+        "run.end_time=2.0"])
+    sim = Simulation(scene)
+    guard = next(s for s in sim.scheme.position_stages if s.name == "drum_impermeability")
+    sim.run()
+    n = sim.state.n_material
+    x = sim.state.position.to_numpy()
+    v = sim.state.velocity.to_numpy()[:n]
+    assert guard.corrections[None] == 0
+    assert np.hypot(x[:n, 0], x[:n, 1]).max() < R - 0.25 * 0.0075
+    np.testing.assert_allclose(x[n:], sim.state.wall_rest_position.to_numpy(), atol=1e-9)  # 2 full turns
+    r = np.hypot(x[:n, 0], x[:n, 1])
+    rigid = 2 * math.pi * r.mean()
+    assert 0.5 * rigid < np.linalg.norm(v, axis=1).mean() < 2.0 * rigid

@@ -21,6 +21,8 @@ class Context:
     scene: Any
     gradient: Any = None  # PlainGradient or CorrectedGradient: grad W as pair loops see it
     time_step: Any = None  # 0-d field: the dt of the step being taken [s] (set by Scheme.step)
+    time: Any = None  # 0-d field: the time the position stages move the scene to [s] (Scheme.after_move)
+    step_fraction: Any = None  # 0-d field: how far into the step that is: 1/2 (predictor, half step) or 1
 
 
 class Stage:

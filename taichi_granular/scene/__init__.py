@@ -140,6 +140,9 @@ def build_initial(scene: Scene, model) -> InitialParticles:
             centre = 0.5 * (np.array(block.lower[:2]) + np.array(block.upper[:2]))
             radius = 0.5 * (block.upper[0] - block.lower[0])
             pts = pts[np.sum((pts[:, :2] - centre) ** 2, axis=1) <= radius**2]
+        if block.clip_circle is not None:  # a drum's fill: dp/2 clear of its wall
+            cx, cy, radius = block.clip_circle
+            pts = pts[np.hypot(pts[:, 0] - cx, pts[:, 1] - cy) <= radius - 0.5 * dp]
         if len(pts) == 0:
             raise ConfigError(f"particles[{k}]", "box holds no particle at this spacing")
         vel = np.zeros_like(pts) if block.velocity is None else np.tile(np.array(block.velocity, float), (len(pts), 1))
@@ -161,6 +164,7 @@ def build_initial(scene: Scene, model) -> InitialParticles:
 
     wall_pos, wall_depth, wall_normal, wall_beta, wall_extrap, wall_of = [], [], [], [], [], []
     wall_mu = []  # tan(delta) of each boundary particle's source (-1: no Coulomb friction)
+    wall_omega, wall_centre = [], []  # rigid rotation of each boundary particle's source (drums)
     layers = int(math.ceil(2.0 * scene.numerics.smoothing_length / dp - 1e-9))
     for w, wall in enumerate(scene.walls):
         lower = wall.lower if wall.lower is not None else scene.domain.lower
@@ -182,6 +186,8 @@ def build_initial(scene: Scene, model) -> InitialParticles:
         wall_extrap.append(np.full(len(pts), 1.0 if wall.ghost_stress == "extrapolated" else 0.0))
         wall_of.append(np.full(len(pts), w))
         wall_mu.append(np.full(len(pts), _friction_coefficient(wall)))
+        wall_omega.append(np.zeros(len(pts)))
+        wall_centre.append(np.zeros((len(pts), dim)))
     for k, obstacle in enumerate(scene.obstacles):
         pts = obstacle_particles(obstacle, dim, dp, layers)
         if len(pts) == 0:
@@ -193,13 +199,21 @@ def build_initial(scene: Scene, model) -> InitialParticles:
         wall_extrap.append(np.zeros(len(pts)))
         wall_of.append(np.full(len(pts), len(scene.walls) + k))
         wall_mu.append(np.full(len(pts), _friction_coefficient(obstacle)))
+        wall_omega.append(np.full(len(pts), getattr(obstacle, "angular_velocity", 0.0)))
+        wall_centre.append(np.tile(np.asarray(obstacle.origin or (0.0,) * dim, float), (len(pts), 1)))
     if wall_pos:
         x_wall, keep = _unique_points(np.concatenate(wall_pos), dp)
         wall_fields = {"wall_distance": np.concatenate(wall_depth)[keep],
                        "wall_normal": np.concatenate(wall_normal)[keep],
                        "wall_beta_max": np.concatenate(wall_beta)[keep],
                        "wall_extrapolation": np.concatenate(wall_extrap)[keep],
-                       "wall_friction": np.concatenate(wall_mu)[keep]}
+                       "wall_friction": np.concatenate(wall_mu)[keep],
+                       "wall_rest_position": x_wall,
+                       "wall_angular_velocity": np.concatenate(wall_omega)[keep],
+                       "wall_rotation_centre": np.concatenate(wall_centre)[keep]}
+        if dim == 2:  # the rigid rotation's velocity, omega z x (x - c)
+            arm = x_wall - wall_fields["wall_rotation_centre"]
+            wall_fields["wall_velocity"] = wall_fields["wall_angular_velocity"][:, None] * np.c_[-arm[:, 1], arm[:, 0]]
         wall_of_arr = np.concatenate(wall_of)[keep]
         _check_inside_domain(x_wall, scene, lambda i: _wall_key(scene, wall_of_arr[i]),
                              "wall particles reach outside the domain; enlarge domain")

@@ -22,7 +22,8 @@ from typing import Callable, List, Tuple
 
 import numpy as np
 
-from ..config import (BoxObstacle, ChuteObstacle, CylinderObstacle, MeshObstacle, PostRowsObstacle, WedgeObstacle)
+from ..config import (BoxObstacle, ChuteObstacle, CylinderObstacle, DrumObstacle, MeshObstacle, PostRowsObstacle,
+                      WedgeObstacle)
 
 
 def local_axes(tilt_deg: float, dim: int) -> np.ndarray:
@@ -209,8 +210,22 @@ def box_inside(lower, upper):
     return lambda p: np.all((p >= lower) & (p <= upper), axis=1)
 
 
+def drum_particles(radius: float, spacing: float, layers: int) -> np.ndarray:
+    """Rings at radii R + (k + 1/2) dp, k < layers, each spaced about dp along its arc and turned
+    by half a spacing from the ring inside it (no radial gap lines up), centred at 0  [m]."""
+    rings = []
+    for k in range(layers):
+        r = radius + (k + 0.5) * spacing
+        n = max(3, int(round(2.0 * math.pi * r / spacing)))
+        phi = (np.arange(n) + 0.5 * (k % 2)) * 2.0 * math.pi / n
+        rings.append(np.c_[r * np.cos(phi), r * np.sin(phi)])
+    return np.concatenate(rings)
+
+
 def obstacle_particles(obstacle, dim: int, spacing: float, layers: int) -> np.ndarray:
     """Boundary particles of one obstacle, global coordinates  [m]."""
+    if isinstance(obstacle, DrumObstacle):
+        return drum_particles(obstacle.radius, spacing, layers) + np.asarray(obstacle.origin or (0.0, 0.0), float)
     if isinstance(obstacle, ChuteObstacle):
         return chute_particles(obstacle, dim, spacing, layers)
     if isinstance(obstacle, BoxObstacle):

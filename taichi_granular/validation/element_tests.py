@@ -3,7 +3,7 @@
 A cube of particles (3D lattice) is given the velocity v = L x of a uniform velocity gradient
 L at every step. The package's own stages then do the work: kernel gradient renormalisation
 and the SPH velocity gradient [M31] (which the correction makes exact for this linear field),
-the hypoplastic stress rate, the predictor-corrector update of T_s [P] and the tension guard.
+the predictor-corrector update of T_s [P] by the sub-stepped point ODE, with its tension guard.
 Positions stay where they are: the deformation is homogeneous, so the stress does not depend
 on where the particles sit, and a patch sheared to a strain of 5 would have no interior left.
 Results are read on the interior particles (full kernel support).
@@ -67,7 +67,7 @@ class ElementTest:
 
     def __init__(self, scene, initial_pressure: float):
         from ..physics.gradient_correction import GradientCorrection
-        from ..physics.rheology.hypoplastic import FrictionalStressRate, TensionGuard, TotalStress
+        from ..physics.rheology.hypoplastic import FrictionalStressUpdate, TotalStress
         from ..physics.strain_rate import StrainRate
         from ..scheme import Scheme
 
@@ -75,8 +75,8 @@ class ElementTest:
         by_class = {type(s): s for s in self.scheme.rate_stages + self.scheme.position_stages}
         self.neighbours = self.scheme.rate_stages[0]
         self.correction = by_class[GradientCorrection]
-        self.strain_rate, self.stress_rate = by_class[StrainRate], by_class[FrictionalStressRate]
-        self.total, self.guard = by_class[TotalStress], by_class[TensionGuard]
+        self.strain_rate, self.stress_update = by_class[StrainRate], by_class[FrictionalStressUpdate]
+        self.total = by_class[TotalStress]
         self.state = self.scheme.state
         self.model = self.scheme.model
         n = self.state.n_material
@@ -98,47 +98,33 @@ class ElementTest:
         for i in range(self.state.n_material):
             self.state.velocity[i] = velocity_gradient @ self.state.position[i]
 
-    @ti.kernel
-    def update(self, dt: float, predictor: ti.i32):
-        """T_s(1/2) = T_s + dt/2 rate(n); T_s(n+1) = T_s(n) + dt rate(1/2)  [P]."""
-        ti.loop_config(serialize=runtime.serial_loops)
-        for i in range(self.state.n_material):
-            if predictor:
-                self.state.frictional_stress_start[i] = self.state.frictional_stress[i]
-                self.state.frictional_stress[i] += 0.5 * dt * self.state.frictional_stress_rate[i]
-            else:
-                self.state.frictional_stress[i] = self.state.frictional_stress_start[i] + \
-                    dt * self.state.frictional_stress_rate[i]
-
     def advance(self, velocity_gradient: np.ndarray, dt: float) -> None:
-        """One predictor-corrector step of T_s under L."""
+        """One step of T_s under L: the predictor and corrector updates of a scene's step."""
         self.impose(ti.Matrix(velocity_gradient))
         self.strain_rate.run()
-        for predictor in (1, 0):
-            self.stress_rate.run()
-            self.update(dt, predictor)
-            self.guard.run()
+        self.scheme.dt[None] = dt
+        for fraction in (0.5, 1.0):
+            self.scheme.step_fraction[None] = fraction
+            self.stress_update.run()
         D = 0.5 * (velocity_gradient + velocity_gradient.T)
         self.strain += math.sqrt(2.0 / 3.0 * float(np.sum(D * D))) * dt  # equivalent strain
 
     def readings(self) -> dict:
         """Interior means: frictional stress T_s, total stress T (with Bagnold), I_e, the gradient error."""
         self.total.run()
-        self.stress_rate.run()
         idx = self.interior
         T_s = self.state.frictional_stress.to_numpy()[idx].mean(axis=0)
-        rate = self.state.frictional_stress_rate.to_numpy()[idx].mean(axis=0)
         p = self.state.pressure.to_numpy()[idx].mean()
         s = self.state.deviatoric_stress.to_numpy()[idx].mean(axis=0)
         grad = self.state.velocity_gradient.to_numpy()[idx]
-        return {"frictional_stress": T_s, "total_stress": s - p * np.eye(3), "rate": rate,
+        return {"frictional_stress": T_s, "total_stress": s - p * np.eye(3),
                 "density_factor": float(self.state.density_factor.to_numpy()[idx].mean()),
                 "velocity_gradient": grad.mean(axis=0), "gradient_spread": float(np.ptp(grad, axis=0).max())}
 
 
-def relative_growth(T: np.ndarray, rate: np.ndarray, strain_rate: float) -> float:
-    """d ln|T| / d strain: zero at a stationary state  [-]."""
-    return float(np.sum(T * rate) / np.sum(T * T)) / strain_rate
+def relative_growth(T_before: np.ndarray, T_after: np.ndarray, strain: float) -> float:
+    """d ln|T| / d strain over the last ``strain``: zero at a stationary state  [-]."""
+    return math.log(float(np.linalg.norm(T_after) / np.linalg.norm(T_before))) / strain
 
 
 @dataclass
@@ -191,6 +177,10 @@ def _run_stationary(kind: str, strain: float, strain_step: float, particles_per_
     D = 0.5 * (L + L.T)
     eq_rate = math.sqrt(2.0 / 3.0 * float(np.sum(D * D)))
     dt = strain_step / eq_rate
+    last = 0.05 * strain  # the growth is read over the last 5 % of the strain
+    while test.strain < strain - last - 1e-12:
+        test.advance(L, dt)
+    T_before = test.readings()["frictional_stress"]
     while test.strain < strain - 1e-12:
         test.advance(L, dt)
     r = test.readings()
@@ -200,7 +190,7 @@ def _run_stationary(kind: str, strain: float, strain_step: float, particles_per_
     else:
         result.ratio = T[0, 2] / -T[2, 2]
     result.density_factor = r["density_factor"]
-    result.growth = relative_growth(T, r["rate"], eq_rate)
+    result.growth = relative_growth(T_before, T, last)
     result.strain = test.strain
     result.gradient_error = float(np.abs(r["velocity_gradient"] - L).max()) / rate
     return result

@@ -53,7 +53,7 @@ class DynamicWalls(NoWalls):
     )
 
     @classmethod
-    def position_stage_classes(cls):
+    def position_stage_classes(cls, scene):
         return []
 
     def __init__(self, state, gravity=None):

@@ -18,6 +18,12 @@ The stress is stored as p_w = -tr(sigma_w)/d and s_w = sigma_w + p_w I, so that 
 term that builds sigma_j = s_j - p_j I sees sigma_w. A boundary particle with no material in
 reach carries zero stress, the wall's velocity and the reference density.
 
+Drums keep a safeguard like the ghost walls' (physics/walls/ghost.py): a material particle found
+closer than dp/4 to the drum's radius is put back and loses its outward radial velocity
+(counted in ``corrections``). Measured: without it a small drum (R = 5 cm, omega = 2 pi rad/s)
+lost a grain through its wall within a revolution -- a grain whose stress has fallen to the
+tension guard has no stiffness (the law is of degree one in T_s) and nothing stops it at the wall.
+
 The velocity is extrapolated before the material's rates (continuity and velocity gradient see
 the no-slip wall), the stress after the material's stress and before the momentum equation.
 Walls that move (the rotating drum) carry their prescribed velocity in ``wall_velocity``.
@@ -45,8 +51,11 @@ class ExtrapolatedWalls(NoWalls):
     fields = EXTRAPOLATED_FIELDS
 
     @classmethod
-    def position_stage_classes(cls):
-        return []
+    def position_stage_classes(cls, scene):
+        """The drum's rigid rotation, if some obstacle turns; the drum's impermeability safeguard."""
+        turning = any(getattr(o, "angular_velocity", 0.0) != 0.0 for o in scene.obstacles)
+        drums = any(o.shape == "drum" for o in scene.obstacles)
+        return ([WallRotation] if turning else []) + ([DrumImpermeability] if drums else [])
 
     @classmethod
     def stage_classes(cls, scene):
@@ -131,6 +140,81 @@ class WallStressExtrapolation(Stage):
                     sigma[a, b] = acc[a, b] / acc[self.dim, 0]
                 density = acc[self.dim, 1] / acc[self.dim, 0]
             pressure = -sigma.trace() / self.dim
+            if pressure < 0.0:  # no tension: the correction pulls where the wall is above the material
+                sigma = ti.Matrix.zero(float, self.dim, self.dim)
+                pressure = 0.0
             self.state.pressure[w] = pressure
             self.state.deviatoric_stress[w] = sigma + pressure * ti.Matrix.identity(float, self.dim)
             self.state.density[w] = density
+
+
+@ti.data_oriented
+class WallRotation(Stage):
+    """Turns rotating boundary particles (2D drums) rigidly to the angle omega t of the time the
+    scene is moved to, x = c + R(omega t)(x_0 - c), and sets v_wall = omega z x (x - c). The
+    positions follow from t, not from a sum of steps: no drift over many revolutions, and a
+    resumed run lands exactly where it left."""
+
+    name = "wall_rotation"
+    category = "walls"
+    equation = "rigid rotation"
+    fields = (
+        FieldSpec("wall_rest_position", "vector", "x_0, the boundary particle's position at t = 0", "m", "wall"),
+        FieldSpec("wall_angular_velocity", "scalar", "omega of the rotating wall (0: fixed)", "rad/s", "wall"),
+        FieldSpec("wall_rotation_centre", "vector", "c, centre of the wall's rotation", "m", "wall"),
+    )
+
+    def __init__(self, ctx):
+        super().__init__(ctx)
+        self.time = ctx.time
+
+    def run(self) -> None:
+        self._run()
+        self.grid.invalidate_fixed()  # boundary particles moved: rebin them at the next build
+
+    @ti.kernel
+    def _run(self):
+        t = self.time[None]
+        ti.loop_config(serialize=runtime.serial_loops)
+        for k in range(self.state.n_wall):
+            omega = self.state.wall_angular_velocity[k]
+            if omega != 0.0:
+                c = self.state.wall_rotation_centre[k]
+                arm0 = self.state.wall_rest_position[k] - c
+                cos_a, sin_a = ti.cos(omega * t), ti.sin(omega * t)
+                arm = ti.Vector([cos_a * arm0[0] - sin_a * arm0[1], sin_a * arm0[0] + cos_a * arm0[1]])
+                self.state.position[self.state.n_material + k] = c + arm
+                self.state.wall_velocity[k] = omega * ti.Vector([-arm[1], arm[0]])
+
+
+@ti.data_oriented
+class DrumImpermeability(Stage):
+    """After every position update: material beyond R - dp/4 from a drum's centre goes back to
+    R - dp/4 with its outward radial velocity removed (module docstring)."""
+
+    name = "drum_impermeability"
+    category = "walls"
+    equation = "no-penetration"
+
+    def __init__(self, ctx):
+        super().__init__(ctx)
+        drums = [o for o in ctx.scene.obstacles if o.shape == "drum"]
+        self.centres = [tuple(o.origin or (0.0, 0.0)) for o in drums]
+        self.limits = [o.radius - 0.25 * ctx.scene.numerics.particle_spacing for o in drums]
+        self.corrections = ti.field(ti.i32, shape=())
+
+    @ti.kernel
+    def _run(self):
+        ti.loop_config(serialize=runtime.serial_loops)
+        for i in range(self.state.n_material):
+            for d in ti.static(range(len(self.limits))):
+                arm = self.state.position[i] - ti.Vector(self.centres[d])
+                r = arm.norm()
+                if r > self.limits[d]:
+                    radial = arm / r
+                    self.state.position[i] = ti.Vector(self.centres[d]) + self.limits[d] * radial
+                    v = self.state.velocity[i]
+                    outward = v.dot(radial)
+                    if outward > 0.0:
+                        self.state.velocity[i] = v - outward * radial
+                    self.corrections[None] += 1

@@ -37,7 +37,7 @@ class NoWalls:
     fields = ()
 
     @classmethod
-    def position_stage_classes(cls):
+    def position_stage_classes(cls, scene):
         return []
 
     def __init__(self, state, gravity=None):
@@ -73,7 +73,7 @@ class GhostWalls(NoWalls):
     name = "ghost"
 
     @classmethod
-    def position_stage_classes(cls):
+    def position_stage_classes(cls, scene):
         return [WallImpermeability]
     fields = (
         FieldSpec("wall_normal", "vector", "unit normal of the ghost's wall, into the material", "-", "wall"),
