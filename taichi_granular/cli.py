@@ -88,6 +88,9 @@ def cmd_validate(args) -> int:
     if args.case == "obstacle-flow":
         from .validation.cli import validate_obstacle_flow
         return validate_obstacle_flow(args)
+    if args.case == "drum":
+        from .validation.cli import validate_drum
+        return validate_drum(args)
     if args.case == "element-tests":
         from .validation.cli import validate_element_tests
         return validate_element_tests(args)
@@ -150,11 +153,11 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("validate", help="run a validation case and print its errors")
     p.add_argument("case", choices=["inclined-plane", "column-collapse", "column-collapse-3d", "stake-rows",
-                                       "obstacle-flow", "element-tests"])
+                                       "obstacle-flow", "element-tests", "drum"])
     p.add_argument("--resolution", choices=["coarse", "paper"], default="coarse",
                    help="column-collapse-3d, stake-rows, obstacle-flow: the coarse CPU scenes or the paper's "
                         "resolution (GPU)")
-    p.add_argument("--cases", nargs="+", help="only these (e.g. a0_90 a2_75; case1 case3)")
+    p.add_argument("--cases", nargs="+", help="only these (e.g. a0_90 a2_75; case1 case3; omega1)")
     p.add_argument("--config", help="scene file (default: the bundled one)")
     p.add_argument("--out", help="output directory (default: output/validate/<case>)")
     p.add_argument("--reuse", action="store_true", help="evaluate existing output instead of running")

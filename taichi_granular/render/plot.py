@@ -36,8 +36,8 @@ def plot_points_and_curve(points: Sequence[Tuple[float, float]], curve: Tuple[np
     canvas = np.ones((height, width, 3))
     xs = np.concatenate([curve[0], [p[0] for p in points]])
     ys = np.concatenate([curve[1], [p[1] for p in points], [0.0]])
-    x_lo, x_hi = 0.0, float(xs.max()) * 1.05
-    y_lo, y_hi = 0.0, float(ys.max()) * 1.1
+    x_lo, x_hi = min(0.0, float(xs.min()) * 1.05), float(xs.max()) * 1.05
+    y_lo, y_hi = min(0.0, float(ys.min()) * 1.1), float(ys.max()) * 1.1
     left, right, top, bottom = MARGIN_LEFT, width - MARGIN_RIGHT, MARGIN_TOP, height - MARGIN_BOTTOM
 
     def to_px(x, y):

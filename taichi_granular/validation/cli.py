@@ -216,3 +216,41 @@ def validate_element_tests(args) -> int:
           f"stationary; shear cell: no residual stress for C <= 0.504, residual at 0.524): "
           f"{'PASS' if ok else 'FAIL'}; {base / 'element_tests.csv'}")
     return 0 if ok else 1
+
+
+def validate_drum(args) -> int:
+    """Rotating drum of [P] at omega = 0.5, 1, 2 rad/s: inclination, flowing depth, flux, rigid bed."""
+    from ..render.frames import write_png
+    from ..render.plot import plot_points_and_curve
+    from . import drum as dr
+
+    paths = _case_paths("hypoplastic", "drum_omega*.yaml", args)
+    base = Path(args.out) if args.out else Path("output/validate/drum")
+    results = []
+    print(dr.HEADER)
+    for scene, out, times, frames in _each_case(paths, base, args):
+        result = dr.evaluate_drum(scene, times, frames)
+        results.append(result)
+        dr.write_profile_csv(result, out / "velocity_profile.csv")
+        image = plot_points_and_curve(list(zip(result.depth, result.velocity)), (result.depth, result.rigid_velocity),
+                                      "depth below the surface on the middle cross-section (m)",
+                                      "downhill velocity (m/s)", f"{scene.name}: squares sph, line rigid rotation")
+        write_png(out / "velocity_profile.png", image)
+        print(result.row(), flush=True)
+    print(f"steady window: the last {100 * dr.STEADY_FRACTION:.0f} % of the frames; [P]: Peng et al. (2016); flux "
+          "reference: the kinematic omega (R^2 - (R - H_0)^2)/2")
+    ok = True
+    for r in results:
+        ref = r.reference
+        if ref is not None:
+            ok &= abs(r.inclination_deg - ref[0]) <= dr.INCLINATION_TOLERANCE_DEG
+            ok &= abs(r.flowing_depth / ref[1] - 1.0) <= dr.DEPTH_TOLERANCE
+        ok &= r.bed_departure < 0.1
+    ordered = sorted((r for r in results if r.reference is not None), key=lambda r: r.omega)
+    rising = all(a.inclination_deg < b.inclination_deg and a.flowing_depth < b.flowing_depth
+                 for a, b in zip(ordered, ordered[1:]))
+    ok &= rising
+    print(f"acceptance (inclination within {dr.INCLINATION_TOLERANCE_DEG} deg, depth within "
+          f"{100 * dr.DEPTH_TOLERANCE:.0f} %, both rising with omega, bed within 10 % of omega R of rigid rotation): "
+          f"{'PASS' if ok else 'FAIL'}; profiles -> {base}/<case>/velocity_profile.csv, .png")
+    return 0 if ok else 1
