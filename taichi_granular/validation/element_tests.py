@@ -78,7 +78,6 @@ class ElementTest:
         self.strain_rate, self.stress_update = by_class[StrainRate], by_class[FrictionalStressUpdate]
         self.total = by_class[TotalStress]
         self.state = self.scheme.state
-        self.model = self.scheme.model
         n = self.state.n_material
         self.state.frictional_stress.from_numpy(np.tile(-initial_pressure * np.eye(3), (n, 1, 1)))
         self.neighbours.run()
@@ -119,7 +118,7 @@ class ElementTest:
         grad = self.state.velocity_gradient.to_numpy()[idx]
         return {"frictional_stress": T_s, "total_stress": s - p * np.eye(3),
                 "density_factor": float(self.state.density_factor.to_numpy()[idx].mean()),
-                "velocity_gradient": grad.mean(axis=0), "gradient_spread": float(np.ptp(grad, axis=0).max())}
+                "velocity_gradient": grad.mean(axis=0)}
 
 
 def relative_growth(T_before: np.ndarray, T_after: np.ndarray, strain: float) -> float:
