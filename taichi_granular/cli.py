@@ -79,7 +79,7 @@ def cmd_validate(args) -> int:
     if args.case == "inclined-plane":
         from .validation.cli import validate_inclined_plane
         return validate_inclined_plane(args)
-    if args.case in ("column-collapse", "column-collapse-3d"):
+    if args.case in ("column-collapse", "column-collapse-3d", "pile-collapse"):
         from .validation.cli import validate_column_collapse
         return validate_column_collapse(args)
     if args.case == "stake-rows":
@@ -152,8 +152,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=cmd_render)
 
     p = sub.add_parser("validate", help="run a validation case and print its errors")
-    p.add_argument("case", choices=["inclined-plane", "column-collapse", "column-collapse-3d", "stake-rows",
-                                       "obstacle-flow", "element-tests", "drum"])
+    p.add_argument("case", choices=["inclined-plane", "column-collapse", "column-collapse-3d", "pile-collapse",
+                                    "stake-rows", "obstacle-flow", "element-tests", "drum"])
     p.add_argument("--resolution", choices=["coarse", "paper"], default="coarse",
                    help="column-collapse-3d, stake-rows, obstacle-flow: the coarse CPU scenes or the paper's "
                         "resolution (GPU)")

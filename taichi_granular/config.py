@@ -697,6 +697,9 @@ class Numerics:
     stress_diffusion: float = _key(
         "delta_s of the diffusion of integrated stress tensors (physics/stress_diffusion.py; 0 = off; "
         "models with a stress history only)", 0.0, "-")
+    bulk_viscosity: float = _key(
+        "alpha_b of a numerical bulk viscosity, T += alpha_b rho c h tr(D) I, that resists compaction and dilation "
+        "but not shear (hypoplastic model only; 0 = off; physics/rheology/hypoplastic.py)", 0.0, "-")
     particle_shifting: ParticleShifting = _key("particle shifting against particle-scale disorder",
                                                ParticleShifting())
     artificial_stress: ArtificialStress = _key("artificial stress against the tensile instability (models with "
@@ -716,6 +719,8 @@ class Numerics:
         for key in ("density_diffusion", "stress_diffusion"):
             if not 0.0 <= getattr(self, key) <= 1.0:
                 raise ConfigError(f"{path}.{key}", f"must lie in [0, 1], got {getattr(self, key)}")
+        if not 0.0 <= self.bulk_viscosity <= 5.0:
+            raise ConfigError(f"{path}.bulk_viscosity", f"must lie in [0, 5], got {self.bulk_viscosity}")
 
     @property
     def smoothing_length(self) -> float:
@@ -851,6 +856,9 @@ class Scene:
         if self.material.model == "mu_i" and self.numerics.artificial_stress.enabled:
             raise ConfigError("numerics.artificial_stress.epsilon", "the tensile instability correction needs a "
                                                                     "stress tensor model (elastoplastic); set it to 0")
+        if self.material.model != "hypoplastic" and self.numerics.bulk_viscosity > 0.0:
+            raise ConfigError("numerics.bulk_viscosity", "only the hypoplastic model has no equation of state to resist "
+                                                         "compaction; set it to 0")
         if self.material.model == "mu_i" and self.numerics.stress_diffusion > 0.0:
             raise ConfigError("numerics.stress_diffusion", "mu(I) integrates no stress (its stress is algebraic); "
                                                            "set it to 0")

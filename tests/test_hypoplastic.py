@@ -11,7 +11,7 @@ from taichi_granular.config import ConfigError
 from taichi_granular.physics.rheology.hypoplastic import HypoplasticBagnold
 from taichi_granular.validation import element_tests as et
 
-SHEAR = np.array([[0.0, 0.0, 1.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]])  # v_x = z: unit simple shear
+SHEAR = et.SIMPLE_SHEAR
 TRIAXIAL = np.diag([-1.0, 0.5, 0.5])  # isochoric compression along x
 
 
@@ -23,39 +23,9 @@ def model(parameter_set="set1", **material):
     return HypoplasticBagnold.from_scene(scene)
 
 
-@ti.data_oriented
-class PointIntegrator:
-    """Integrates dT/dt of one material point under a fixed velocity gradient and density factor,
-    keeping tr T = -3 (the law is homogeneous of degree one in T, so only the direction of T
-    evolves); returns T and its relative growth d ln|T|/d strain at the end."""
-
-    def __init__(self, hypoplastic):
-        self.model = hypoplastic
-        self.stress = ti.Matrix.field(3, 3, float, shape=())
-        self.growth = ti.field(float, shape=())
-
-    @ti.kernel
-    def run(self, velocity_gradient: ti.types.matrix(3, 3, float), density_factor: float, steps: ti.i32,
-            dt: float):
-        T = -ti.Matrix.identity(float, 3)
-        ti.loop_config(serialize=True)
-        for _ in range(steps):
-            k1 = self.model.frictional_rate(T, velocity_gradient, density_factor)
-            k2 = self.model.frictional_rate(T + 0.5 * dt * k1, velocity_gradient, density_factor)
-            T += dt * k2
-            T *= -3.0 / T.trace()
-        rate = self.model.frictional_rate(T, velocity_gradient, density_factor)
-        self.stress[None] = T
-        self.growth[None] = (T * rate).sum() / (T * T).sum()
-
-    def __call__(self, velocity_gradient, density_factor, strain=3.0, dt=1e-4):
-        self.run(ti.Matrix(velocity_gradient), density_factor, int(round(strain / dt)), dt)
-        return self.stress.to_numpy(), float(self.growth[None])
-
-
 @pytest.fixture(scope="module")
 def point():
-    return PointIntegrator(model("set1"))
+    return et.PointIntegrator(model("set1"))
 
 
 @pytest.mark.parametrize("density_factor,reference", [(1.0, 2.454), (0.6, 3.89)])
@@ -268,3 +238,12 @@ def test_coarse_drum_turns_two_revolutions_without_a_grain_leaving_it():
     r = np.hypot(x[:n, 0], x[:n, 1])
     rigid = 2 * math.pi * r.mean()
     assert 0.5 * rigid < np.linalg.norm(v, axis=1).mean() < 2.0 * rigid
+
+
+@pytest.mark.parametrize("parameter_set,density_factor,friction", [("set1", 0.912, 0.491), ("set2", 0.913, 0.494)])
+def test_stationary_simple_shear_solver_finds_the_reference_state(parameter_set, density_factor, friction):
+    """The bisection behind the inclined plane's mu_h lands on MODEL.md's stationary states
+    (measured set 1: I_e 0.9117, tau/sigma_n 0.4908; set 2: 0.9131, 0.4942)."""
+    I_e, mu_h = et.stationary_simple_shear(model(parameter_set), tolerance=1e-4)
+    assert I_e == pytest.approx(density_factor, abs=0.002)
+    assert mu_h == pytest.approx(friction, rel=0.01)

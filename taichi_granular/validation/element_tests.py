@@ -41,6 +41,59 @@ ANNULAR_REFERENCE = {"sigma_xz": 36.5, "sigma_zz": 83.2}  # Pa, C = 0.524 [P]
 STATIONARY_GROWTH = 0.05  # |d ln|T_s| / d strain| below this: stationary
 
 
+SIMPLE_SHEAR = np.array([[0.0, 0.0, 1.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]])  # v_x = z: unit simple shear
+
+
+@ti.data_oriented
+class PointIntegrator:
+    """The rate law of one material point under a fixed velocity gradient and density factor,
+    integrated with tr T = -3 held (the law is homogeneous of degree one in T, so only the
+    direction of T evolves). Returns T and its relative growth d ln|T|/d strain at the end:
+    zero growth marks the stationary state of MODEL.md section 2."""
+
+    def __init__(self, hypoplastic):
+        self.model = hypoplastic
+        self.stress = ti.Matrix.field(3, 3, float, shape=())
+        self.growth = ti.field(float, shape=())
+
+    @ti.kernel
+    def run(self, velocity_gradient: ti.types.matrix(3, 3, float), density_factor: float, steps: ti.i32,
+            dt: float):
+        T = -ti.Matrix.identity(float, 3)
+        ti.loop_config(serialize=True)
+        for _ in range(steps):
+            k1 = self.model.frictional_rate(T, velocity_gradient, density_factor)
+            k2 = self.model.frictional_rate(T + 0.5 * dt * k1, velocity_gradient, density_factor)
+            T += dt * k2
+            T *= -3.0 / T.trace()
+        rate = self.model.frictional_rate(T, velocity_gradient, density_factor)
+        self.stress[None] = T
+        self.growth[None] = (T * rate).sum() / (T * T).sum()
+
+    def __call__(self, velocity_gradient, density_factor, strain=3.0, dt=1e-4):
+        self.run(ti.Matrix(velocity_gradient), density_factor, int(round(strain / dt)), dt)
+        return self.stress.to_numpy(), float(self.growth[None])
+
+
+def stationary_simple_shear(hypoplastic, low: float = 0.7, high: float = 1.0, tolerance: float = 1e-5):
+    """(I_e, tau/sigma_n) of the stationary state of simple shear, with the Jaumann terms: the
+    density factor where the growth of |T_s| changes sign (bisection; it falls with I_e), and
+    the friction of the hypoplastic part there, mu_h of the inclined plane (MODEL.md section 2;
+    set 1: 0.912 / 0.491, set 2: 0.913 / 0.494)  [-, -]."""
+    point = PointIntegrator(hypoplastic)
+    if not point(SIMPLE_SHEAR, low)[1] > 0.0 > point(SIMPLE_SHEAR, high)[1]:
+        raise ValueError(f"no stationary simple shear for I_e in [{low}, {high}]")
+    while high - low > tolerance:
+        middle = 0.5 * (low + high)
+        if point(SIMPLE_SHEAR, middle)[1] > 0.0:
+            low = middle
+        else:
+            high = middle
+    density_factor = 0.5 * (low + high)
+    T, _ = point(SIMPLE_SHEAR, density_factor)
+    return density_factor, float(T[0, 2] / -T[2, 2])
+
+
 def patch_scene(parameter_set: str, void_ratio: float, bagnold_coefficient: Optional[float] = None,
                 particles_per_side: int = 8, spacing: float = 1e-3, smoothing_function: str = "wendland_c6"):
     """A 3D cube of particles of the hypoplastic material, no walls, no gravity."""
