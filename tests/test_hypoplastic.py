@@ -101,22 +101,29 @@ def test_bagnold_stress_in_simple_shear():
     assert np.abs(T_spin).max() == 0.0
 
 
-def test_tension_guard_resets_stress_free_and_tensile_points_only():
+def test_tension_guard_keeps_compressive_directions_and_resets_tensile_ones():
+    """Below tr T_s = -eps: untouched. Between -eps and 0 with every principal stress compressive:
+    scaled back to tr T_s = -eps, direction kept (the stationary direction survives a passage
+    near zero stress). A principal tension or tr T_s >= 0: reset to -(eps/3) I."""
     hypo = model("set1", tension_guard=3.0)
-    stresses = ti.Matrix.field(3, 3, float, shape=3)
-    stresses.from_numpy(np.array([np.diag([-10.0, -10.0, -10.0]), np.diag([1.0, -1.0, -1.0]),
-                                  [[-0.5, 40.0, 0.0], [40.0, -0.5, 0.0], [0.0, 0.0, -1.0]]]))
+    cases = np.array([np.diag([-10.0, -10.0, -10.0]), np.diag([1.0, -1.0, -1.0]),
+                      [[-0.5, 40.0, 0.0], [40.0, -0.5, 0.0], [0.0, 0.0, -1.0]],
+                      [[-0.5, 0.2, 0.0], [0.2, -0.3, 0.0], [0.0, 0.0, -0.2]], np.diag([0.5, 0.2, 0.1])])
+    stresses = ti.Matrix.field(3, 3, float, shape=len(cases))
+    stresses.from_numpy(cases)
 
     @ti.kernel
     def guard():
-        for k in range(3):
+        for k in range(stresses.shape[0]):
             stresses[k] = hypo.guarded(stresses[k])
 
     guard()
     T = stresses.to_numpy()
     np.testing.assert_array_equal(T[0], np.diag([-10.0] * 3))  # compressed: untouched
-    np.testing.assert_allclose(T[1], -np.eye(3), rtol=1e-12)  # tr T = -1 > -3: reset to -(eps/3) I
-    np.testing.assert_allclose(T[2], -np.eye(3), rtol=1e-12)  # tr T = -2 > -3, shear and all
+    np.testing.assert_allclose(T[1], -np.eye(3), rtol=1e-12)  # a principal tension: reset to -(eps/3) I
+    np.testing.assert_allclose(T[2], -np.eye(3), rtol=1e-12)  # shear beyond any compressive state: reset
+    np.testing.assert_allclose(T[3], 3.0 * cases[3], rtol=1e-12)  # compressive, tr -1: scaled to tr -3
+    np.testing.assert_allclose(T[4], -np.eye(3), rtol=1e-12)  # tensile trace: reset
 
 
 def test_element_test_patch_reaches_the_stationary_states():

@@ -85,19 +85,20 @@ def _flow(bulk_viscosity):
     return ip.evaluate(scene, times, frames, window=0.05), density_factor
 
 
-def test_reduced_plane_holds_the_bagnold_profile_only_with_bulk_viscosity(reference):
+def test_reduced_plane_holds_the_bagnold_profile_and_the_bulk_viscosity_holds_its_void_ratio(reference):
     """From the analytic profile (28 deg, 12 mm, d 2 mm, surface speed 1.55 m/s), 0.1 s: with
-    alpha_b = 0.5 the layer's mean I_e stays at the stationary 0.913 (measured 0.9116-0.9133) and
-    the velocity profile within 10 % of the Bagnold-type solution (measured 6.1 %); without it
-    the void ratio and T_s oscillate with growing amplitude (measured: mean I_e 0.70 at 0.03 s,
-    1.53 at 0.06 s; velocity error 50 %)."""
+    alpha_b = 0.5 the layer's mean I_e stays at the stationary 0.913 (measured 0.9116-0.9132)
+    and the velocity profile within 5 % of the Bagnold-type solution (measured 1.0 %); without
+    it the void ratio and T_s oscillate (measured: mean I_e 0.907-0.938, T_s swinging twenty-fold;
+    before the residual damping of physics/momentum.py and the direction-keeping tension guard
+    this layer blew up)."""
     damped, factor = _flow(0.5)
     assert np.abs(factor - reference.density_factor).max() < 0.005, factor
-    assert damped.velocity_error < 0.10, damped.report()
+    assert damped.velocity_error < 0.05, damped.report()
+    assert damped.drift < 0.02, damped.report()
     assert abs(damped.height / damped.mass_height - 1.0) < 0.02, damped.report()
-    undamped, factor = _flow(0.0)
-    assert np.abs(factor - reference.density_factor).max() > 0.1, factor
-    assert undamped.velocity_error > 0.2, undamped.report()
+    _, factor = _flow(0.0)
+    assert np.abs(factor - reference.density_factor).max() > 0.015, factor
 
 
 def test_bulk_viscosity_is_for_the_hypoplastic_model_only():

@@ -18,8 +18,9 @@ Morris/Cleary pairwise viscous term and gravity,
   viscous term of [M27] applied to the velocity *residual*
       v_ij - (grad v_i + grad v_j)/2 . x_ij,
   which vanishes for every quadratic velocity field (the smooth flow is left to the stress)
-  and damps the particle-scale modes; like the rest it is antisymmetric in (i, j). Models
-  without a viscosity (elastoplastic) leave this to Monaghan's artificial viscosity [A16].
+  and damps the particle-scale modes; like the rest it is antisymmetric in (i, j). The
+  hypoplastic model lends its secant viscosity |T*|/gamma_dot (capped); models without a
+  viscosity (elastoplastic) leave this to Monaghan's artificial viscosity [A16].
 
 Both sums are antisymmetric in (i, j): momentum is conserved to round-off between material
 particles.
@@ -101,10 +102,15 @@ class StressMomentum(_Momentum):
         grad_w = self.gradient.pairwise(i, j, x_ij, r)
         acc += s.mass[j] * (term @ grad_w)
         if ti.static(self.viscous_residual):
-            # pairwise viscous damping of the velocity residual (zero for quadratic fields)
+            # pairwise viscous damping of the velocity residual (zero for quadratic fields); a
+            # boundary particle that is its own state (extrapolated walls) has no gradient or
+            # viscosity of its own: it lends i's
+            m = k
+            if k >= s.n_material:
+                m = i
             v_residual = self.walls.relative_velocity(i, j, x_ij) - \
-                0.5 * (s.velocity_gradient[i] + s.velocity_gradient[k]) @ x_ij
-            acc += self.viscous_coefficient(i, j, k, v_residual, x_ij, r) * grad_w
+                0.5 * (s.velocity_gradient[i] + s.velocity_gradient[m]) @ x_ij
+            acc += self.viscous_coefficient(i, j, m, v_residual, x_ij, r) * grad_w
 
 
 MOMENTUM = {"viscous_pair": ViscousMomentum, "stress_divergence": StressMomentum}

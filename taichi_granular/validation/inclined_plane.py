@@ -103,6 +103,25 @@ class MuIReference:
         return 1.0 / np.sqrt(self.material.grain_compressibility * phi * self.material.grain_density)
 
 
+_STATIONARY_SHEAR = {}  # (I_e, mu_h) per set of rate-law constants: solved once per process
+
+
+def stationary_shear_of(scene: Scene):
+    """(I_e, mu_h) of the stationary simple shear of the scene's hypoplastic material, by point
+    integration of the package's rate law (validation/element_tests.py), solved once per
+    process and set of constants  [-, -]."""
+    m = scene.material
+    key = (tuple(m.constants), m.min_void_ratio, tuple(m.critical_void_ratio), tuple(m.density_exponent))
+    if key not in _STATIONARY_SHEAR:
+        from .. import runtime
+        from ..physics.rheology.hypoplastic import HypoplasticBagnold
+        from .element_tests import stationary_simple_shear
+        if runtime.current() is None:
+            runtime.init("cpu", scene.precision)
+        _STATIONARY_SHEAR[key] = stationary_simple_shear(HypoplasticBagnold.from_scene(scene))
+    return _STATIONARY_SHEAR[key]
+
+
 class BagnoldReference:
     """The Bagnold-like steady profile of the hypoplastic + Bagnold model (MODEL.md section 2),
     for the layer's mean bulk density (from ``frames``, else rho_s/(1 + e_0))."""
@@ -110,12 +129,10 @@ class BagnoldReference:
     name = "Bagnold-type [P]"
 
     def __init__(self, scene: Scene, frames=None, n_material=None):
-        from ..physics.rheology.hypoplastic import HypoplasticBagnold
-        from .element_tests import stationary_simple_shear
         m = scene.material
         self.material, self.g = m, scene.gravity.magnitude
         self.slope = math.radians(scene.gravity.tilt_deg)
-        self.density_factor, self.friction = stationary_simple_shear(HypoplasticBagnold.from_scene(scene))
+        self.density_factor, self.friction = stationary_shear_of(scene)
         self.density = m.reference_density
         if frames:
             self.density = float(np.mean([np.sum(f["mass"][:n_material]) / np.sum(f["mass"][:n_material] /

@@ -17,8 +17,14 @@ Total stress T = T_s + T_v:
       T_v = -k_v rho_s d^2 gamma_eq^2 cos(alpha_i) I + 2 k_v rho_s d^2 gamma_eq sin(alpha_i) D*,
   gamma_eq = sqrt(2 D*:D*); in simple shear tau_v/p_v = tan(alpha_i) exactly (Bagnold 1954).
 - Tension guard (our choice, MODEL.md): the law divides by tr T_s, so where tr T_s > -eps
-  (a few Pa: free surface, ballistic grains) T_s is reset to -(eps/3) I after every update;
-  the nonlinear term vanishes with ||D|| anyway.
+  (a few Pa: free surface, ballistic grains) T_s is scaled back to tr T_s = -eps with its
+  direction kept, if every principal stress is compressive, and reset to -(eps/3) I otherwise
+  (MODEL.md's reset), after every sub-step. Why keep the direction: the law is homogeneous of
+  degree one in T_s, so its direction evolves on its own towards the stationary one and the
+  magnitude grows or decays with I_e. Reset to isotropic at every touch, T_s can never leave
+  the guard under fast shear (from -q I the trace rate is +I_e |c3| q ||D||, tensile, before the
+  deviator has grown): measured, rows of a flowing layer sat at the guard while their I_e
+  (0.887) called for growth, and the layer accelerated on its Bagnold stress alone.
 
 Time integration of T_s: the law is stiff locally. Its rate is of order (sum |c_k|) ||D|| |T_s|
 (3 327 ||D|| |T_s| with set 2), so an explicit update over the flow's time step is unstable
@@ -38,14 +44,24 @@ answers a change of void ratio within a strain of order one (measured by point i
 set 2: d ln|T_s|/d strain = +3.2 at I_e 0.900 and -2.3 at 0.920 around the stationary 0.913),
 i.e. within 1/gamma_dot, about as fast as a layer can compact or dilate under its weight. The
 coupled loop then oscillates with growing amplitude: measured on the inclined plane of
-configs/hypoplastic/ (d 5 mm, 27 deg, gamma_dot up to 66 1/s), T_s vanished wherever I_e
-overshot the stationary value, the layer compacted to e = 0.73 under its own weight, T_s
-jumped to 4 kPa and a grain was thrown out of the domain at 0.09 s. With alpha_b = 0.1 the
-same layer holds I_e = 0.913 +- 0.001 and e = 0.897 (the stationary state) throughout. The
-term acts on tr D only: unlike the Monaghan artificial viscosity it adds no pressure and no
-stress in shear (the Monaghan term with alpha = 0.1 dilated the same layer to e = 1.9: its
-pair pressure grows with the shear rate, alpha c h rho gamma_dot ~ 6 kPa against a weight of
-0.3 kPa).
+configs/hypoplastic/ at d 5 mm, 27 deg (gamma_dot up to 66 1/s; before the direction-keeping
+guard and the residual damping below), T_s vanished wherever I_e overshot the stationary value,
+the layer compacted to e = 0.73 under its own weight, T_s jumped to 4 kPa and a grain was thrown
+out of the domain at 0.09 s; with alpha_b = 0.1 the same layer held I_e = 0.913 +- 0.001 and
+e = 0.897 (the stationary state). With the guard and the damping, and no alpha_b, the layer of
+the config (d 5 mm, 28 deg) no longer blows up but I_e swings between 0.90 and 0.93 and T_s
+twenty-fold within 0.3 s; with alpha_b = 0.5 it holds 0.913 for 1.5 s. The term acts on tr D only: unlike the Monaghan artificial viscosity it adds no pressure
+and no stress in shear (the Monaghan term with alpha = 0.1 dilated a 2 mm-grain layer at 28 deg
+to e = 1.9 within 0.1 s: its pair pressure grows with the shear rate, alpha c h rho gamma_dot
+~ 6 kPa against a weight of 0.3 kPa). It is cut where it would make the mean stress tensile
+(dilating grains at the free surface), and it brings its own time-step bound
+(stable_time_step).
+
+Residual damping: the momentum equation's pairwise damping of the velocity residual
+(physics/momentum.py; zero for quadratic velocity fields) is switched on by this model's
+``viscosity`` field, its secant viscosity |T*|/gamma_dot capped at 0.1 rho c h
+(secant_viscosity). Without it the SPH velocity gradient's blind spot, a velocity alternating
+from one row of particles to the next, grew unopposed on the inclined plane.
 
 Checked by point integration against the stationary states of MODEL.md (tests and
 ``taichi-granular validate element-tests``): isochoric triaxial compression, set 1, becomes
@@ -80,6 +96,8 @@ class HypoplasticBagnold:
         FieldSpec("density_factor", "scalar", "I_e = (1 - a) D_c + a of the last update", "-", "material"),
         FieldSpec("deviatoric_stress", "matrix", "s of the total stress T_s + T_v (in-plane part in 2D)", "Pa",
                   "material"),
+        FieldSpec("viscosity", "scalar", "secant viscosity |T*|/(sqrt 2 gamma_dot), capped at 0.1 rho c h: the "
+                  "strength of the momentum equation's residual damping", "Pa s", "material"),
     )
     history = ()  # T_s is advanced by its own sub-stepped update (module docstring), not by the integrator
     substep_limit = 0.5  # (sum |c_k|) ||D|| dt_sub
@@ -106,11 +124,13 @@ class HypoplasticBagnold:
         self.bagnold_shear = 2.0 * bagnold * math.sin(alpha_i)
         self.collisional = bagnold > 0.0
         self.bulk_viscosity = 0.0  # alpha_b; from_scene sets it (module docstring)
+        self.cfl = 1.0  # the time step's CFL factor, which the bulk viscosity's own bound undoes
 
     @classmethod
     def from_scene(cls, scene):
         model = cls(scene.material, scene.dimension, scene.numerics.smoothing_length)
         model.bulk_viscosity = float(scene.numerics.bulk_viscosity)
+        model.cfl = float(scene.numerics.cfl)
         return model
 
     # ---- the rate law, one particle -------------------------------------------------------------
@@ -163,10 +183,17 @@ class HypoplasticBagnold:
 
     @ti.func
     def guarded(self, stress):
-        """T_s, or -(eps/3) I where tr T_s > -eps (the tension guard, MODEL.md section 2)  [Pa]."""
+        """The tension guard (our choice, MODEL.md section 2; module docstring): T_s where
+        tr T_s <= -eps; where -eps < tr T_s < 0 and no principal stress is tensile, T_s scaled
+        back to tr T_s = -eps with its direction kept; otherwise -(eps/3) I  [Pa]."""
         result = stress
-        if stress.trace() > -self.guard:
+        trace = stress.trace()
+        if trace > -self.guard:
             result = -(self.guard / 3.0) * ti.Matrix.identity(float, 3)
+            if trace < 0.0:
+                eigenvalues, _ = ti.sym_eig(stress)
+                if ti.max(eigenvalues[0], eigenvalues[1], eigenvalues[2]) <= 0.0:
+                    result = stress * (-self.guard / trace)
         return result
 
     @ti.func
@@ -180,11 +207,38 @@ class HypoplasticBagnold:
         return -self.bagnold_pressure * gamma_eq**2 * identity + self.bagnold_shear * gamma_eq * D_dev
 
     @ti.func
-    def bulk_viscous_stress(self, i):
-        """zeta tr(D) I, zeta = alpha_b rho c h: the numerical bulk viscosity (module docstring)  [Pa]."""
+    def bulk_viscous_stress(self, i, stress):
+        """zeta tr(D) I, zeta = alpha_b rho c h: the numerical bulk viscosity (module docstring), cut
+        so that it never turns the mean of ``stress`` (T_s + T_v) tensile: a dilating grain at the
+        free surface would otherwise be pulled back by a tension no granular material carries
+        (measured: a surface grain of the inclined plane, at -1.8 kPa, was dragged through the
+        layer and the wall at 0.87 s)  [Pa]."""
         rate = ti.static(self.bulk_viscosity * self.wave_speed * self.h) * self.state.density[i] * \
             self.state.velocity_gradient[i].trace()
-        return rate * ti.Matrix.identity(float, 3)
+        return ti.min(rate, -stress.trace() / 3.0) * ti.Matrix.identity(float, 3)
+
+    @ti.func
+    def secant_viscosity(self, i, stress):
+        """eta = sqrt(T*:T*/2)/gamma_dot (tau/gamma_dot in simple shear), at most 0.1 rho c h (the
+        [M39] viscous bound then equals the step's h/c, so it never shortens dt): how strongly
+        the momentum equation damps the particle-scale velocity residual (physics/momentum.py).
+        Why: the SPH velocity gradient does not see a velocity alternating from one row of
+        particles to the next, so the stress never resists it. Measured on the inclined plane
+        (d 5 mm, 28 deg) without it: rows alternated by +-0.15 m/s about the profile by 0.2 s
+        (velocity error 14 % per row, the averages of row pairs within a few % of the reference),
+        and the lattice broke up between 0.25 and 0.45 s  [Pa s]."""
+        identity = ti.Matrix.identity(float, 3)
+        deviator = stress - (stress.trace() / 3.0) * identity
+        D = self.embed(self.state.velocity_gradient[i])
+        D = 0.5 * (D + D.transpose())
+        D_dev = D - (D.trace() / 3.0) * identity
+        gamma = ti.sqrt(2.0 * (D_dev * D_dev).sum())
+        cap = ti.static(0.1 * self.wave_speed * self.h) * self.state.density[i]
+        eta = cap
+        tau = ti.sqrt(0.5 * (deviator * deviator).sum())
+        if tau < cap * gamma:
+            eta = tau / gamma
+        return eta
 
     @ti.func
     def void_ratio(self, k):
@@ -216,15 +270,18 @@ class HypoplasticBagnold:
 
     @ti.func
     def stable_time_step(self, i):
-        """min(h/(max(c, c_T) + |v_i|), 0.1 rho h^2/zeta): dt = chi h/c of [P] with chi =
-        numerics.cfl, unless the stress makes the law stiffer than c = 80 m/s (c_T of
-        stiffness_wave_speed), and the viscous limit of [M39] for the bulk viscosity zeta =
-        alpha_b rho c h, i.e. 0.1 h/(alpha_b c). Measured: a small drum (R = 5 cm, omega = 2 pi
-        rad/s) blew up in its bulk at 0.23 s with dt = 0.3 h/c alone, and ran at 0.15 h/c  [s]."""
+        """h/(max(c, c_T) + |v_i|), the caller's CFL factor applied: dt = chi h/c of [P] with
+        chi = numerics.cfl, unless the stress makes the law stiffer than c = 80 m/s (c_T of
+        stiffness_wave_speed). Measured: a small drum (R = 5 cm, omega = 2 pi rad/s) blew up in
+        its bulk at 0.23 s with dt = 0.3 h/c alone, and ran at 0.15 h/c.
+        With the bulk viscosity zeta = alpha_b rho c h, also the explicit diffusion limit
+        dt <= 0.125 h^2/nu = 0.125 h/(alpha_b c) (Morris et al. 1997): a stability bound of its
+        own, so the CFL factor does not shrink it again. Measured on the inclined plane (d 2 mm,
+        28 deg): alpha_b = 1 at dt = 0.3 h/c (2.4 times the bound) blew up at 0.28 s  [s]."""
         c = ti.max(self.wave_speed, self.stiffness_wave_speed(i))
         step = self.h / (c + self.state.velocity[i].norm())
         if ti.static(self.bulk_viscosity > 0.0):
-            step = ti.min(step, ti.static(0.1 * self.h / (self.bulk_viscosity * self.wave_speed)))
+            step = ti.min(step, ti.static(0.125 * self.h / (self.bulk_viscosity * self.wave_speed * self.cfl)))
         return step
 
     @ti.func
@@ -318,8 +375,9 @@ class TotalStress(Stage):
             if ti.static(self.model.collisional):
                 stress += self.model.collisional_stress(self.model.embed(self.state.velocity_gradient[i]))
             if ti.static(self.model.bulk_viscosity > 0.0):
-                stress += self.model.bulk_viscous_stress(i)
+                stress += self.model.bulk_viscous_stress(i, stress)
             pressure = -stress.trace() / 3.0
+            self.state.viscosity[i] = self.model.secant_viscosity(i, stress)
             s = ti.Matrix.zero(float, self.state.dim, self.state.dim)
             for a, b in ti.static(ti.ndrange(self.state.dim, self.state.dim)):
                 s[a, b] = stress[a, b]
