@@ -73,7 +73,12 @@ class ExtrapolatedWalls(NoWalls):
 
 @ti.data_oriented
 class WallVelocityExtrapolation(Stage):
-    """v_w = 2 v_wall - sum_f v_f W_wf / sum_f W_wf (no slip) [P]."""
+    """No slip [P]: v_w = v_wall(x_w) - sum_f (v_f - v_wall(x_f)) W_wf / sum_f W_wf, the material's
+    velocity relative to the wall's rigid motion mirrored across the wall. For a wall at rest or
+    in translation (v_wall uniform) this is [P]'s v_w = 2 v_wall - sum_f v_f W_wf / sum_f W_wf.
+    For a turning wall v_wall differs from point to point: [P]'s form with v_wall taken at the
+    boundary particle gives a material turning rigidly with the drum a spurious slip of omega
+    (r_w - r_f) ~ 2 omega dp, which shears the grains next to the wall without end."""
 
     name = "wall_velocity_extrapolation"
     category = "walls"
@@ -82,13 +87,27 @@ class WallVelocityExtrapolation(Stage):
     def __init__(self, ctx):
         super().__init__(ctx)
         self.dim = ctx.state.dim
+        self.turning = any(getattr(o, "angular_velocity", 0.0) != 0.0 for o in ctx.scene.obstacles)
+
+    @ti.func
+    def wall_motion(self, k, x):
+        """v_wall at point x of the rigid motion of boundary particle k (2D turning walls:
+        omega z x (x - c); otherwise its own, uniform, velocity)  [m/s]."""
+        v = self.state.wall_velocity[k]
+        if ti.static(self.turning):
+            omega = self.state.wall_angular_velocity[k]
+            if omega != 0.0:
+                arm = x - self.state.wall_rotation_centre[k]
+                v = omega * ti.Vector([-arm[1], arm[0]])
+        return v
 
     @ti.func
     def pair(self, w, f, x_wf, r, acc: ti.template()):
         weight = self.smoothing.value(r)
+        relative = self.state.velocity[f] - self.wall_motion(w - self.state.n_material, self.state.position[f])
         acc[self.dim] += weight
         for a in ti.static(range(self.dim)):
-            acc[a] += weight * self.state.velocity[f][a]
+            acc[a] += weight * relative[a]
 
     @ti.kernel
     def _run(self):
@@ -100,7 +119,7 @@ class WallVelocityExtrapolation(Stage):
             v = self.state.wall_velocity[k]
             if acc[self.dim] > 0.0:
                 mean = ti.Vector([acc[a] for a in ti.static(range(self.dim))]) / acc[self.dim]
-                v = 2.0 * v - mean
+                v -= mean
             self.state.velocity[w] = v
 
 
