@@ -41,7 +41,7 @@ def boundary_class(scene: Scene):
 def rate_stage_classes(scene: Scene, model) -> List[type]:
     """Stages of one rate evaluation, in order."""
     classes = [NeighbourSearch] + GRADIENTS[scene.numerics.gradient_correction].stage_classes()
-    if scene.numerics.particle_shifting.enabled:
+    if scene.numerics.particle_shifting.enabled or getattr(model, "needs_free_surface", False):
         classes.append(FreeSurface)
     walls_cls = boundary_class(scene)
     classes += getattr(walls_cls, "stage_classes", lambda s: [])(scene)
