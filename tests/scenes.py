@@ -33,23 +33,8 @@ def build(data):
 
 
 def run_frames(scene, interval):
-    """Run ``scene`` to its end time; return (times, frames, diagnostics): a snapshot of every
-    particle field (with ``is_wall``) every ``interval`` seconds, and the diagnostics row of each
-    stretch between them -- what the validation measures read from a run's output."""
-    import numpy as np
+    """Run ``scene`` to its end time; return (times, frames, diagnostics) as the validation
+    measures read them from a run's output (validation.inclined_plane.run_in_memory)."""
+    from taichi_granular.validation.inclined_plane import run_in_memory
 
-    from taichi_granular.simulation import Simulation
-
-    sim = Simulation(scene)
-    end = scene.run.end_time
-    is_wall = np.r_[np.zeros(sim.state.n_material, int), np.ones(sim.state.n_wall, int)]
-    times, frames, diagnostics = [], [], []
-    sim.run(end_time=0.0)  # initial rates and equation of state, no step
-    while True:
-        times.append(sim.t)
-        frames.append({**sim.scheme.snapshot(), "is_wall": is_wall})
-        if sim.t >= end - 1e-9:
-            break
-        sim.run(end_time=min(end, sim.t + interval))
-        diagnostics.append(sim.last_diagnostics)
-    return times, frames, diagnostics
+    return run_in_memory(scene, scene.run.end_time, interval)

@@ -79,7 +79,7 @@ def test_bagnold_frames_score_zero_and_perturbed_frames_their_error(reference):
 
 def _flow(bulk_viscosity):
     scene = plane(bulk_viscosity)
-    times, frames = ip.run_in_memory(scene, 0.1, 0.01, ip.impose_analytic_velocity)
+    times, frames, _ = ip.run_in_memory(scene, 0.1, 0.01, ip.impose_analytic_velocity)
     n = int(np.sum(frames[0]["is_wall"] == 0))
     density_factor = np.array([f["density_factor"][:n].mean() for f in frames[1:]])
     return ip.evaluate(scene, times, frames, window=0.05), density_factor

@@ -5,7 +5,6 @@ import numpy as np
 import pytest
 
 from scenes import build, layer
-from taichi_granular.simulation import Simulation
 from taichi_granular.validation import inclined_plane as ip
 
 
@@ -88,15 +87,7 @@ def test_reduced_inclined_plane_holds_the_analytic_profile():
     data = layer(height=height, length=16 * dp, dp=dp, tilt_deg=25.0, end_time=duration)
     data["numerics"]["gradient_correction"] = "matrix"
     scene = build(data)
-    sim = Simulation(scene)
-    ip.impose_analytic_velocity(sim)
-    n = sim.state.n_material
-    is_wall = np.r_[np.zeros(n, int), np.ones(sim.state.n_wall, int)]
-    times, frames = [], []
-    while sim.t < duration - 1e-9:
-        sim.run(end_time=min(duration, sim.t + 0.05))
-        times.append(sim.t)
-        frames.append({**sim.scheme.snapshot(), "is_wall": is_wall})
+    times, frames, _ = ip.run_in_memory(scene, duration, 0.05, ip.impose_analytic_velocity)
     result = ip.evaluate(scene, times, frames, window=0.25)
     assert result.velocity_error < 0.05, result.report()
     assert result.pressure_error < 0.05, result.report()

@@ -158,9 +158,9 @@ class BagnoldReference:
             (math.sin(alpha_i) - mu * math.cos(alpha_i))
         return math.sqrt(drive / resistance)
 
-    def velocity(self, z, height: float, slope_rad: float = None) -> np.ndarray:
+    def velocity(self, z, height: float) -> np.ndarray:
         z = np.clip(np.asarray(z, float), 0.0, height)
-        return 2.0 / 3.0 * self.shear_rate_scale(slope_rad) * (height**1.5 - (height - z) ** 1.5)
+        return 2.0 / 3.0 * self.shear_rate_scale() * (height**1.5 - (height - z) ** 1.5)
 
     def normal_stress(self, z, height: float) -> np.ndarray:
         z = np.clip(np.asarray(z, float), 0.0, height)
@@ -381,20 +381,25 @@ def layer_acceleration(times: Sequence[float], frames: Sequence[Dict[str, np.nda
 
 
 def run_in_memory(scene: Scene, duration: float, interval: float, prepare=None):
-    """(times, frames) of ``scene`` run for ``duration`` without writing files; ``prepare(sim)``
-    sets the start."""
+    """(times, frames, diagnostics) of ``scene`` run for ``duration`` without writing files: a
+    snapshot of every particle field (with ``is_wall``) every ``interval`` seconds, from t = 0
+    (initial rates evaluated, no step), and the diagnostics row of each stretch between them;
+    ``prepare(sim)`` sets the start."""
     from ..simulation import Simulation
     sim = Simulation(scene)
     if prepare is not None:
         prepare(sim)
-    n = sim.state.n_material
-    is_wall = np.r_[np.zeros(n, int), np.ones(sim.state.n_wall, int)]
-    times, frames = [0.0], [{**sim.scheme.snapshot(), "is_wall": is_wall}]
-    while sim.t < duration - 1e-9:
-        sim.run(end_time=min(duration, sim.t + interval))
+    is_wall = np.r_[np.zeros(sim.state.n_material, int), np.ones(sim.state.n_wall, int)]
+    times, frames, diagnostics = [], [], []
+    sim.run(end_time=0.0)  # initial rates, no step
+    while True:
         times.append(sim.t)
         frames.append({**sim.scheme.snapshot(), "is_wall": is_wall})
-    return times, frames
+        if sim.t >= duration - 1e-9:
+            break
+        sim.run(end_time=min(duration, sim.t + interval))
+        diagnostics.append(sim.last_diagnostics)
+    return times, frames, diagnostics
 
 
 @dataclass
@@ -429,8 +434,8 @@ def bounding_slopes(scene: Scene, duration: float = BOUND_DURATION) -> List[Boun
     for slope_deg, mu in ((low - BOUND_MARGIN_DEG, reference.friction),
                           (high + BOUND_MARGIN_DEG, math.tan(math.radians(high)))):
         tilted = replace(scene, gravity=replace(scene.gravity, tilt_deg=slope_deg))
-        times, frames = run_in_memory(tilted, duration, BOUND_INTERVAL,
-                                      lambda sim: impose_analytic_velocity(sim, scene.gravity.tilt_deg))
+        times, frames, _ = run_in_memory(tilted, duration, BOUND_INTERVAL,
+                                         lambda sim: impose_analytic_velocity(sim, scene.gravity.tilt_deg))
         n = int(np.sum(frames[0]["is_wall"] == 0))
         theta = math.radians(slope_deg)
         results.append(BoundingSlope(slope_deg, layer_acceleration(times, frames, n),

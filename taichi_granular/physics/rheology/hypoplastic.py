@@ -50,8 +50,8 @@ the layer compacted to e = 0.73 under its own weight, T_s jumped to 4 kPa and a 
 out of the domain at 0.09 s; with alpha_b = 0.1 the same layer held I_e = 0.913 +- 0.001 and
 e = 0.897 (the stationary state). With the guard and the damping, and no alpha_b, the layer of
 the config (d 5 mm, 28 deg) no longer blows up but I_e swings between 0.90 and 0.93 and T_s
-twenty-fold within 0.3 s; with alpha_b = 0.5 it holds 0.913 for 1.5 s. The term acts on tr D only: unlike the Monaghan artificial viscosity it adds no pressure
-and no stress in shear (the Monaghan term with alpha = 0.1 dilated a 2 mm-grain layer at 28 deg
+twenty-fold within 0.3 s; with alpha_b = 0.5 it holds 0.913 for 1.5 s. The term acts on tr D
+only: unlike the Monaghan artificial viscosity it adds no pressure and no stress in shear (the Monaghan term with alpha = 0.1 dilated a 2 mm-grain layer at 28 deg
 to e = 1.9 within 0.1 s: its pair pressure grows with the shear rate, alpha c h rho gamma_dot
 ~ 6 kPa against a weight of 0.3 kPa). It is cut where it would make the mean stress tensile
 (dilating grains at the free surface), and it brings its own time-step bound
@@ -59,7 +59,7 @@ to e = 1.9 within 0.1 s: its pair pressure grows with the shear rate, alpha c h 
 
 Residual damping: the momentum equation's pairwise damping of the velocity residual
 (physics/momentum.py; zero for quadratic velocity fields) is switched on by this model's
-``viscosity`` field, its secant viscosity |T*|/gamma_dot capped at 0.1 rho c h
+``viscosity`` field, its secant viscosity sqrt(T*:T*/2)/gamma_dot capped at 0.1 rho c h
 (secant_viscosity). Without it the SPH velocity gradient's blind spot, a velocity alternating
 from one row of particles to the next, grew unopposed on the inclined plane.
 
@@ -96,14 +96,14 @@ class HypoplasticBagnold:
         FieldSpec("density_factor", "scalar", "I_e = (1 - a) D_c + a of the last update", "-", "material"),
         FieldSpec("deviatoric_stress", "matrix", "s of the total stress T_s + T_v (in-plane part in 2D)", "Pa",
                   "material"),
-        FieldSpec("viscosity", "scalar", "secant viscosity |T*|/(sqrt 2 gamma_dot), capped at 0.1 rho c h: the "
+        FieldSpec("viscosity", "scalar", "secant viscosity sqrt(T*:T*/2)/gamma_dot, capped at 0.1 rho c h: the "
                   "strength of the momentum equation's residual damping", "Pa s", "material"),
     )
     history = ()  # T_s is advanced by its own sub-stepped update (module docstring), not by the integrator
     substep_limit = 0.5  # (sum |c_k|) ||D|| dt_sub
     max_substeps = 256
 
-    def __init__(self, material, dim: int, smoothing_length: float, state=None):
+    def __init__(self, material, dim: int, smoothing_length: float, state=None, numerics=None):
         self.material = material
         self.dim = dim
         self.state = state
@@ -123,18 +123,16 @@ class HypoplasticBagnold:
         self.bagnold_pressure = bagnold * math.cos(alpha_i)
         self.bagnold_shear = 2.0 * bagnold * math.sin(alpha_i)
         self.collisional = bagnold > 0.0
-        self.needs_free_surface = self.collisional  # T_v is left out on the free surface (collisional_stress)
-        self.free_surface_threshold = 0.9  # Shepard sum below which a grain is on the free surface; from_scene
-        self.bulk_viscosity = 0.0  # alpha_b; from_scene sets it (module docstring)
-        self.cfl = 1.0  # the time step's CFL factor, which the bulk viscosity's own bound undoes
+        self.needs_free_surface = self.collisional  # T_v is left out on the free surface (TotalStress)
+        # from the scene's numerics (defaults: a bare law, as the point-integration tests use it)
+        self.bulk_viscosity = float(numerics.bulk_viscosity) if numerics else 0.0  # alpha_b (module docstring)
+        self.cfl = float(numerics.cfl) if numerics else 1.0  # the step's CFL factor, undone by alpha_b's own bound
+        # Shepard sum below which a grain is on the free surface
+        self.free_surface_threshold = float(numerics.particle_shifting.free_surface_threshold) if numerics else 0.9
 
     @classmethod
     def from_scene(cls, scene):
-        model = cls(scene.material, scene.dimension, scene.numerics.smoothing_length)
-        model.bulk_viscosity = float(scene.numerics.bulk_viscosity)
-        model.cfl = float(scene.numerics.cfl)
-        model.free_surface_threshold = float(scene.numerics.particle_shifting.free_surface_threshold)
-        return model
+        return cls(scene.material, scene.dimension, scene.numerics.smoothing_length, numerics=scene.numerics)
 
     # ---- the rate law, one particle -------------------------------------------------------------
 
@@ -200,14 +198,20 @@ class HypoplasticBagnold:
         return result
 
     @ti.func
+    def deviatoric_rate(self, velocity_gradient3):
+        """(D*, gamma_eq = sqrt(2 D*:D*)): the deviatoric strain rate and its modulus (= |dv_x/dz|
+        in simple shear)  [1/s]."""
+        D = 0.5 * (velocity_gradient3 + velocity_gradient3.transpose())
+        D_dev = D - (D.trace() / 3.0) * ti.Matrix.identity(float, 3)
+        return D_dev, ti.sqrt(2.0 * (D_dev * D_dev).sum())
+
+    @ti.func
     def collisional_stress(self, velocity_gradient3):
         """T_v = -k_v rho_s d^2 gamma_eq^2 cos(alpha_i) I + 2 k_v rho_s d^2 gamma_eq sin(alpha_i) D*,
         gamma_eq = sqrt(2 D*:D*) (extended Bagnold, MODEL.md section 2)  [Pa]."""
-        D = 0.5 * (velocity_gradient3 + velocity_gradient3.transpose())
-        identity = ti.Matrix.identity(float, 3)
-        D_dev = D - (D.trace() / 3.0) * identity
-        gamma_eq = ti.sqrt(2.0 * (D_dev * D_dev).sum())
-        return -self.bagnold_pressure * gamma_eq**2 * identity + self.bagnold_shear * gamma_eq * D_dev
+        D_dev, gamma_eq = self.deviatoric_rate(velocity_gradient3)
+        return -self.bagnold_pressure * gamma_eq**2 * ti.Matrix.identity(float, 3) + \
+            self.bagnold_shear * gamma_eq * D_dev
 
     @ti.func
     def bulk_viscous_stress(self, i, stress):
@@ -230,12 +234,8 @@ class HypoplasticBagnold:
         (d 5 mm, 28 deg) without it: rows alternated by +-0.15 m/s about the profile by 0.2 s
         (velocity error 14 % per row, the averages of row pairs within a few % of the reference),
         and the lattice broke up between 0.25 and 0.45 s  [Pa s]."""
-        identity = ti.Matrix.identity(float, 3)
-        deviator = stress - (stress.trace() / 3.0) * identity
-        D = self.embed(self.state.velocity_gradient[i])
-        D = 0.5 * (D + D.transpose())
-        D_dev = D - (D.trace() / 3.0) * identity
-        gamma = ti.sqrt(2.0 * (D_dev * D_dev).sum())
+        deviator = stress - (stress.trace() / 3.0) * ti.Matrix.identity(float, 3)
+        _, gamma = self.deviatoric_rate(self.embed(self.state.velocity_gradient[i]))
         cap = ti.static(0.1 * self.wave_speed * self.h) * self.state.density[i]
         eta = cap
         tau = ti.sqrt(0.5 * (deviator * deviator).sum())
