@@ -24,7 +24,10 @@ def cmd_run(args) -> int:
     print(f"done: t = {summary.time:.4g} s in {summary.steps} steps, {summary.wall_seconds:.1f} s wall, "
           f"{summary.particle_steps_per_second:.3g} particle-steps/s, {summary.frames} frames")
     if args.profile:
+        from .profiling import compiled_kernels
         print(sim.profiler.table())
+        kernels = compiled_kernels()
+        print(f"compiled kernels ({len(kernels)}): " + ", ".join(k.removeprefix("taichi_granular.") for k in kernels))
     return 0
 
 

@@ -6,6 +6,7 @@ charged to the right stage) and accumulates seconds per stage and per category.
 """
 import time
 from collections import defaultdict
+from typing import List
 
 import taichi as ti
 
@@ -50,3 +51,13 @@ class StageProfiler:
                          f"{100 * sec / total:>7.1f}%")
         lines.append(f"{'total':<49}{total:>10.3f}")
         return "\n".join(lines)
+
+
+def compiled_kernels() -> List[str]:
+    """'module.Class.kernel' of every Taichi kernel compiled so far in this process (Taichi
+    compiles a kernel at its first launch): what a scene's step actually built, so that a test
+    or ``run --profile`` can show that an effect switched off was never compiled."""
+    from taichi.lang import impl
+    return sorted({f"{k.func.__module__}.{k.func.__qualname__}"
+                   for k in impl.get_runtime().kernels if k.compiled_kernels and
+                   k.func.__module__.startswith("taichi_granular")})
