@@ -405,6 +405,10 @@ class Wall:
         "dynamic boundaries: Coulomb friction angle delta between the material and this boundary "
         "(|wall shear force| <= tan(delta) |wall normal force|); default none: the wall resists shear "
         "only through the stress it carries (physics/walls/dynamic.py)", None, "deg")
+    initial_pressure: Literal["zero", "overburden"] = _key(
+        "dynamic boundaries: pressure (and so density, [A5]) of the boundary particles at t = 0: zero "
+        "(the reference density, as [A]), or the weight of the material over them (a layer that starts "
+        "at rest stays at rest instead of falling into the wall and ringing; scene/__init__.py)", "zero")
 
     def check(self, path: str, dim: int) -> None:
         _check_vector(f"{path}.normal", self.normal, dim)
@@ -417,6 +421,9 @@ class Wall:
                 _check_vector(f"{path}.{key}", getattr(self, key), dim)
         if not 1.0 <= self.max_velocity_factor <= 100.0:
             raise ConfigError(f"{path}.max_velocity_factor", "beta_max must lie in [1, 100] [M36]")
+        if self.initial_pressure != "zero" and self.type != "dynamic":
+            raise ConfigError(f"{path}.initial_pressure", "only dynamic boundary particles take their pressure "
+                                                          "from their density")
         if self.friction_angle_deg is not None and self.type != "dynamic":
             raise ConfigError(f"{path}.friction_angle_deg", "only dynamic walls take a friction angle "
                                                             "(ghost walls are no-slip)")
@@ -737,10 +744,19 @@ class Run:
     stop_at_rest: Optional[float] = _key(
         "stop once the kinetic energy, checked at each output, has fallen below this fraction of its peak "
         "(e.g. 1e-3 for a collapse at rest; default: run to end_time)", None, "-")
+    checkpoint_every: int = _key(
+        "write the checkpoint (checkpoint.npz, atomically) every this many frames; `taichi-granular resume` "
+        "continues from it", 1)
+    guard: Literal["step", "stage"] = _key(
+        "when the run-time guard checks every particle for NaN/Inf, leaving the domain and an implausible "
+        "density: after each step, or after every stage of it (names the stage that went wrong; slower)", "step")
 
     def check(self, path: str) -> None:
         _positive(f"{path}.end_time", self.end_time)
         _positive(f"{path}.output_interval", self.output_interval)
+        if self.checkpoint_every < 1:
+            raise ConfigError(f"{path}.checkpoint_every", f"must be a whole number of frames >= 1, got "
+                                                          f"{self.checkpoint_every}")
         if self.stop_at_rest is not None and not 0.0 < self.stop_at_rest < 1.0:
             raise ConfigError(f"{path}.stop_at_rest", f"must lie in (0, 1), got {self.stop_at_rest}")
         if self.max_steps is not None and self.max_steps < 1:

@@ -10,7 +10,13 @@ GUARD_CODES = {
     3: "non-finite or non-positive density",
     4: "non-finite pressure",
     5: "outside the domain",
+    6: "density outside the plausible band",
 }
+
+# A granular bulk is neither half nor twice as dense as its reference (loose packing, grains
+# ejected into a dilute spray, or a density blow-up), whatever the model: the guard's band, as
+# fractions of the model's reference density.
+DENSITY_BAND = (0.5, 2.0)
 
 
 @ti.data_oriented
@@ -54,10 +60,12 @@ class Diagnostics:
 
 @ti.data_oriented
 class Guard:
-    """Finds the first material particle with a non-finite or out-of-domain state."""
+    """Finds the first material particle with a non-finite or out-of-domain state, or a density
+    outside DENSITY_BAND times ``reference_density`` [kg/m^3]."""
 
-    def __init__(self, state, domain):
+    def __init__(self, state, domain, reference_density: float):
         self.state = state
+        self.density_range = (DENSITY_BAND[0] * reference_density, DENSITY_BAND[1] * reference_density)
         self.dim = state.dim
         self.lower = tuple(domain.lower)
         self.upper = tuple(domain.upper)
@@ -97,6 +105,8 @@ class Guard:
                     code = 3
                 elif not self.finite(self.state.pressure[i]):
                     code = 4
+                elif rho < ti.static(self.density_range[0]) or rho > ti.static(self.density_range[1]):
+                    code = 6
             self.code[i] = code
             if code != 0:
                 ti.atomic_min(self.first_bad[None], i)

@@ -5,7 +5,9 @@
 ``<out>/particles.pvd``         the series ParaView opens, with simulated times
 ``<out>/diagnostics.csv``       t, step, dt, kinetic energy, max speed, max density error per frame
 ``<out>/checkpoint.npz``        every particle field and the run's counters at the last frame
-                                (``taichi-granular resume <out>`` continues from it)
+                                (every ``run.checkpoint_every`` frames; ``taichi-granular resume
+                                <out>`` continues from it)
+``<out>/failure.npz``, ``.vtu`` the state at which the run-time guard stopped a run, if it did
 """
 from __future__ import annotations
 
@@ -98,6 +100,7 @@ def particle_mesh(arrays: Dict[str, np.ndarray], n_material: int) -> meshio.Mesh
 
 
 CHECKPOINT = "checkpoint.npz"
+FAILURE = "failure.npz"
 
 
 class RunOutput:
@@ -122,13 +125,22 @@ class RunOutput:
             self.diagnostics = [r for r in rows if r["t"] <= time * (1 + 1e-12)]
 
     def write_checkpoint(self, arrays: Dict[str, np.ndarray], counters: Dict[str, float]) -> None:
+        self._write_state(CHECKPOINT, arrays, counters)
+
+    def write_failure(self, arrays: Dict[str, np.ndarray], counters: Dict[str, float], n_material: int) -> None:
+        """The state at which the run-time guard stopped the run: ``failure.npz`` (every field, as
+        a checkpoint) and ``failure.vtu`` (for ParaView); the checkpoint keeps the last good state."""
+        self._write_state(FAILURE, arrays, counters)
+        mesh = particle_mesh(arrays, n_material)
+        atomic_write(self.dir / "failure.vtu", lambda tmp: meshio.write(tmp, mesh, file_format="vtu"))
+
+    def _write_state(self, name: str, arrays: Dict[str, np.ndarray], counters: Dict[str, float]) -> None:
         data = {f"field/{k}": v for k, v in arrays.items()}
         data.update({f"counter/{k}": np.array(v) for k, v in counters.items()})
         def write(tmp):
             with open(tmp, "wb") as fh:  # a file object: np.savez would append .npz to a bare name
                 np.savez(fh, **data)
-        atomic_write(self.dir / CHECKPOINT, write)
-
+        atomic_write(self.dir / name, write)
 
     def write_scene(self, scene: Scene) -> None:
         atomic_write_text(self.dir / "scene.resolved.yaml", dump_scene(scene))

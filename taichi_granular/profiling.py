@@ -19,11 +19,14 @@ class StageProfiler:
         self.seconds = defaultdict(float)
         self.calls = defaultdict(int)
         self.category_of = {}
+        self.after = None  # called with the stage after each call (the per-stage run-time guard)
 
     def __call__(self, stage, fn=None, *args) -> None:
         fn = stage.run if fn is None else fn
         if not self.enabled:
             fn(*args)
+            if self.after is not None:
+                self.after(stage)
             return
         ti.sync()
         start = time.perf_counter()
@@ -32,6 +35,8 @@ class StageProfiler:
         self.seconds[stage.name] += time.perf_counter() - start
         self.calls[stage.name] += 1
         self.category_of[stage.name] = stage.category
+        if self.after is not None:
+            self.after(stage)
 
     def reset(self) -> None:
         self.seconds.clear()

@@ -8,6 +8,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Optional
 
+import numpy as np
+
 from . import runtime
 from .config import Scene
 from .diagnostics import Diagnostics, Guard
@@ -77,7 +79,9 @@ class Simulation:
         self.scheme = Scheme(scene, self.profiler)
         self.state = self.scheme.state
         self.diagnostics = Diagnostics(self.state, self.scheme.model)
-        self.guard = Guard(self.state, scene.domain)
+        self.guard = Guard(self.state, scene.domain, self.scheme.model.reference_density())
+        if scene.run.guard == "stage":  # every stage call goes through the profiler
+            self.profiler.after = lambda stage: self._check(f"stage {stage.name} of step {self.step_count + 1}")
         self.output = RunOutput(out_dir, scene.run.write_vtu) if out_dir is not None else None
         self.renderer = None
         if self.output is not None and scene.render.frames:
@@ -94,14 +98,29 @@ class Simulation:
     # ---- pieces -------------------------------------------------------------------------------
 
     def _check(self, where: str) -> None:
+        """Stop the run if the guard finds a bad particle: the message names the step, the time,
+        where in the step (``run.guard: stage`` names the stage), the particle and its values,
+        and every other field of that particle that is not finite; the whole state goes to
+        ``failure.npz`` and ``failure.vtu`` next to the outputs, the last checkpoint untouched."""
         bad = self.guard.check()
-        if bad is not None:
-            pid, reason, values = bad
-            block = int(self.scheme.initial.block_of[pid])
-            name = self.scene.particles[block].name
-            raise SimulationError(
-                f"step {self.step_count}, t = {self.t:.6g} s, {where}: particle {pid} (block '{name}') "
-                f"{reason}: " + ", ".join(f"{k} = {v}" for k, v in values.items()))
+        if bad is None:
+            return
+        pid, reason, values = bad
+        block = int(self.scheme.initial.block_of[pid])
+        name = self.scene.particles[block].name
+        arrays = self.scheme.snapshot()
+        broken = sorted(k for k, v in arrays.items() if k in self.state.specs and
+                        np.issubdtype(v.dtype, np.floating) and pid < len(v) and not np.all(np.isfinite(v[pid])))
+        message = (f"{where}, t = {self.t:.6g} s: particle {pid} (block '{name}') "
+                   f"{reason}: " + ", ".join(f"{k} = {v}" for k, v in values.items()))
+        if broken:
+            message += "; non-finite fields of this particle: " + ", ".join(broken)
+        if self.scene.run.guard == "step":
+            message += " (resume from the last checkpoint with --set run.guard=stage to name the stage)"
+        if self.output is not None:
+            self.output.write_failure(arrays, self.counters(), self.state.n_material)
+            message += f"; state written to {self.output.dir / 'failure.npz'} and failure.vtu"
+        raise SimulationError(message)
 
     def write_frame(self) -> None:
         diag = self.diagnostics.measure()
@@ -111,7 +130,8 @@ class Simulation:
             arrays = self.scheme.snapshot()
             self.output.write_frame(self.frame_index, self.t, arrays, self.state.n_material)
             self.output.write_diagnostics(self.last_diagnostics)
-            self.output.write_checkpoint({k: arrays[k] for k in self.state.specs}, self.counters())
+            if self.frame_index % self.scene.run.checkpoint_every == 0:
+                self.output.write_checkpoint({k: arrays[k] for k in self.state.specs}, self.counters())
             if self.renderer is not None:
                 from .render.frames import check_colour_field, png_name, write_png
                 if self.frame_index == 0:  # the first frame comes before the first step
@@ -161,7 +181,7 @@ class Simulation:
         wall_start = time.perf_counter()
         if self.step_count == 0:
             self.scheme.prepare()
-            self._check("initial rates")
+            self._check("initial rates (step 0)")
             self.dt = self.scheme.stable_time_step()
             self.write_frame()
         next_output = (math.floor(self.t / interval + 1e-9) + 1) * interval
@@ -177,7 +197,7 @@ class Simulation:
             self.scheme.step(dt, self.t)
             self.step_count += 1
             self.t += dt
-            self._check("after the step")
+            self._check(f"after step {self.step_count}")
             self.dt = self.scheme.stable_time_step()
             if self.t >= next_output - 1e-9 * interval:
                 self.write_frame()
