@@ -707,6 +707,9 @@ class Numerics:
     bulk_viscosity: float = _key(
         "alpha_b of a numerical bulk viscosity, T += alpha_b rho c h tr(D) I, that resists compaction and dilation "
         "but not shear (hypoplastic model only; 0 = off; physics/rheology/hypoplastic.py)", 0.0, "-")
+    stress_increment: float = _key(
+        "largest relative change |dT_s/dt| dt / |T_s| of the frictional stress in one step, a time-step bound "
+        "(hypoplastic model only; 0 = off; physics/rheology/hypoplastic.py)", 0.0, "-")
     particle_shifting: ParticleShifting = _key("particle shifting against particle-scale disorder",
                                                ParticleShifting())
     artificial_stress: ArtificialStress = _key("artificial stress against the tensile instability (models with "
@@ -728,6 +731,8 @@ class Numerics:
                 raise ConfigError(f"{path}.{key}", f"must lie in [0, 1], got {getattr(self, key)}")
         if not 0.0 <= self.bulk_viscosity <= 5.0:
             raise ConfigError(f"{path}.bulk_viscosity", f"must lie in [0, 5], got {self.bulk_viscosity}")
+        if not 0.0 <= self.stress_increment <= 10.0:
+            raise ConfigError(f"{path}.stress_increment", f"must lie in [0, 10], got {self.stress_increment}")
 
     @property
     def smoothing_length(self) -> float:
@@ -872,6 +877,9 @@ class Scene:
         if self.material.model == "mu_i" and self.numerics.artificial_stress.enabled:
             raise ConfigError("numerics.artificial_stress.epsilon", "the tensile instability correction needs a "
                                                                     "stress tensor model (elastoplastic); set it to 0")
+        if self.material.model != "hypoplastic" and self.numerics.stress_increment > 0.0:
+            raise ConfigError("numerics.stress_increment", "bounds the step by the hypoplastic stress rate: only "
+                                                           "material.model: hypoplastic has one")
         if self.material.model != "hypoplastic" and self.numerics.bulk_viscosity > 0.0:
             raise ConfigError("numerics.bulk_viscosity", "only the hypoplastic model has no equation of state to resist "
                                                          "compaction; set it to 0")
