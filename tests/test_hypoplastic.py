@@ -219,10 +219,12 @@ def test_extrapolated_wall_holds_a_layer_at_rest_with_hydrostatic_stress():
 
 def test_coarse_drum_turns_two_revolutions_without_a_grain_leaving_it():
     """The drum scene of configs/ shrunk to R = 5 cm (dp 7.5 mm, 50 grains, omega = 2 pi rad/s,
-    c = 40 m/s): two revolutions with no grain reaching the wall, i.e. the impermeability
-    safeguard never acts (measured 0 corrections; without artificial viscosity and without the
-    wall's tension cut-off the same drum threw grains through its wall within half a revolution),
-    the wall back where it started, and the bed turning with the drum."""
+    c = 40 m/s): two revolutions with no grain through the wall, the wall back where it started,
+    and the bed turning with the drum. Without artificial viscosity (the configs since this
+    drum's alpha 0.1 held a full-size fill rigid to 51 deg against 42 without) grains reach the
+    wall and the impermeability safeguard turns them back: measured 1 487 corrections in 2 s
+    (with alpha = 0.1: none; without the safeguard and the wall's tension cut-off grains went
+    through within half a revolution)."""
     from taichi_granular.config import load_scene
     from taichi_granular.paths import config_path
     from taichi_granular.simulation import Simulation
@@ -239,7 +241,8 @@ def test_coarse_drum_turns_two_revolutions_without_a_grain_leaving_it():
     n = sim.state.n_material
     x = sim.state.position.to_numpy()
     v = sim.state.velocity.to_numpy()[:n]
-    assert guard.corrections[None] == 0
+    assert guard.corrections[None] < 5 * 1487  # the safeguard acts, rarely (a few per 100 steps)
+    assert sim.step_count > 20 * guard.corrections[None]
     assert np.hypot(x[:n, 0], x[:n, 1]).max() < R - 0.25 * 0.0075
     np.testing.assert_allclose(x[n:], sim.state.wall_rest_position.to_numpy(), atol=1e-9)  # 2 full turns
     r = np.hypot(x[:n, 0], x[:n, 1])
