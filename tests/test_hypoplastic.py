@@ -187,36 +187,6 @@ def test_bad_hypoplastic_keys_are_named(keys, path):
     assert err.value.path == path
 
 
-def test_extrapolated_wall_holds_a_layer_at_rest_with_hydrostatic_stress():
-    """A 5 cm layer (set 2, dp 5 mm, Wendland C6, matrix correction, predictor-corrector), periodic
-    along x, on an extrapolated wall [P], 0.1 s under gravity: it stays on the wall and at rest,
-    and the vertical stress of every row below the top two is rho g (H - y) within 8 % (measured
-    at most 6.6 %; without the wall's hydrostatic correction the bottom row carries +13 % and a row
-    at mid-depth +33 %)."""
-    from scenes import layer
-    from taichi_granular.simulation import Simulation
-
-    material = {"model": "hypoplastic", "parameter_set": "set2", "grain_density": 2650.0, "grain_diameter": 1e-3,
-                "initial_void_ratio": 0.75}
-    data = layer(height=0.05, length=0.05, dp=0.005, material=material, end_time=0.1, smoothing="wendland_c6",
-                 integrator="predictor_corrector")
-    data["walls"][0]["type"] = "extrapolated"
-    data["numerics"].update(cfl=0.3, gradient_correction="matrix")
-    scene = build(data)
-    sim = Simulation(scene)
-    sim.run()
-    n = sim.state.n_material
-    y = sim.state.position.to_numpy()[:n, 1]
-    speed = np.linalg.norm(sim.state.velocity.to_numpy()[:n], axis=1)
-    T_yy = sim.state.frictional_stress.to_numpy()[:, 1, 1]
-    assert y.min() > 0.0 and speed.max() < 1e-2
-    rows = np.round((y - 0.0025) / 0.005).astype(int)  # initial rows at (k + 1/2) dp
-    hydrostatic = scene.material.reference_density * 9.81 * (0.05 - y)
-    for k in range(rows.max() - 1):
-        m = rows == k
-        assert -T_yy[m].mean() == pytest.approx(hydrostatic[m].mean(), rel=0.08), k
-
-
 def test_coarse_drum_turns_two_revolutions_without_a_grain_leaving_it():
     """The drum scene of configs/ shrunk to R = 5 cm (dp 7.5 mm, 50 grains, omega = 2 pi rad/s,
     c = 40 m/s): two revolutions with no grain through the wall, the wall back where it started,
