@@ -38,3 +38,19 @@ def run_frames(scene, interval):
     from taichi_granular.validation.inclined_plane import run_in_memory
 
     return run_in_memory(scene, scene.run.end_time, interval)
+
+
+def lowest_and_rightmost(sim, end_time, interval=0.001):
+    """Run ``sim`` to ``end_time``; the lowest y and the largest x any material particle
+    reached, checked every ``interval`` seconds (walls below y = 0 and beyond some x must
+    keep them above and left)  [m]."""
+    import numpy as np
+
+    n = sim.state.n_material
+    lowest, rightmost = np.inf, -np.inf
+    sim.run(end_time=0.0)
+    while sim.t < end_time - 1e-12:
+        sim.run(end_time=min(end_time, sim.t + interval))
+        x = sim.state.position.to_numpy()[:n]
+        lowest, rightmost = min(lowest, x[:, 1].min()), max(rightmost, x[:, 0].max())
+    return float(lowest), float(rightmost)

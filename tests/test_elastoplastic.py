@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 import taichi as ti
 
+from scenes import lowest_and_rightmost
 from taichi_granular.config import scene_from_dict
 from taichi_granular.physics.rheology import ElastoplasticMohrCoulomb
 from taichi_granular.simulation import Simulation
@@ -169,14 +170,8 @@ def impact_scene(speed=5.0, dp=0.005):
 
 def test_no_particle_crosses_a_dynamic_boundary_in_an_impact():
     sim = Simulation(impact_scene())
-    n = sim.state.n_material
-    lowest, rightmost = np.inf, -np.inf
-    sim.run(end_time=0.0)
-    while sim.t < 0.04 - 1e-12:
-        sim.run(end_time=sim.t + 0.001)
-        x = sim.state.position.to_numpy()[:n]
-        lowest, rightmost = min(lowest, x[:, 1].min()), max(rightmost, x[:, 0].max())
-    v = sim.state.velocity.to_numpy()[:n]
+    lowest, rightmost = lowest_and_rightmost(sim, 0.04)
+    v = sim.state.velocity.to_numpy()[:sim.state.n_material]
     assert lowest > 0.0 and rightmost < 0.06, (lowest, rightmost)  # measured: 3.6 mm, 56.75 mm
     assert np.all(np.isfinite(v)) and v[:, 1].mean() > -0.5  # the walls turned the block back
 

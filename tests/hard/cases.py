@@ -54,3 +54,22 @@ def nearest_distance(x: np.ndarray, period: float) -> float:
     r = np.sqrt((d**2).sum(-1))
     np.fill_diagonal(r, np.inf)
     return float(r.min())
+
+
+def tall_column_data(model: str, aspect_ratio: float, half_width=0.02, dp=0.005, end_time=1.0):
+    """A 2D column of half-width ``half_width`` and height ``aspect_ratio`` x ``half_width``
+    released in the middle of a floor of the model's wall kind (no side walls, the domain wide
+    enough for any run-out), run until at rest (kinetic energy below 1e-3 of its peak) or
+    ``end_time``."""
+    height = aspect_ratio * half_width
+    data = settled_layer_data(model, height=height, length=2 * half_width, dp=dp)
+    reach = 0.4 + height
+    data["domain"] = {"lower": [-reach, -0.03], "upper": [reach, height + 0.05]}
+    data["particles"][0].update(lower=[-half_width, 0.0], upper=[half_width, height])
+    data["walls"][0].update(lower=[-reach, -0.03], upper=[reach, height + 0.05])
+    data["run"] = {"end_time": end_time, "output_interval": 0.02, "stop_at_rest": 1e-3}
+    if model == "hypoplastic":  # the numerics of the pile collapse (configs/hypoplastic/collapse_a0_55.yaml)
+        data["material"]["initial_void_ratio"] = 0.897
+        data["numerics"].update(artificial_viscosity={"alpha": 0.1, "beta": 0.0}, bulk_viscosity=0.5,
+                                stress_increment=1.0)
+    return data

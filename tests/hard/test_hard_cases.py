@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from cases import MODELS, settled_layer_data
-from scenes import build
+from scenes import build, lowest_and_rightmost
 from taichi_granular.simulation import Simulation
 
 
@@ -45,13 +45,7 @@ def test_a_fast_stream_loses_no_grain_through_floor_or_side_wall(model):
     data["walls"].append(side)
     data["run"] = {"end_time": 0.03, "output_interval": 0.001}
     sim = Simulation(build(data))
-    n = sim.state.n_material
-    lowest, rightmost = np.inf, -np.inf
-    sim.run(end_time=0.0)
-    while sim.t < 0.03 - 1e-12:
-        sim.run(end_time=sim.t + 0.001)
-        x = sim.state.position.to_numpy()[:n]
-        lowest, rightmost = min(lowest, x[:, 1].min()), max(rightmost, x[:, 0].max())
-    v = sim.state.velocity.to_numpy()[:n]
+    lowest, rightmost = lowest_and_rightmost(sim, 0.03)
+    v = sim.state.velocity.to_numpy()[:sim.state.n_material]
     assert lowest > 0.0 and rightmost < 0.04, (lowest, rightmost)
     assert np.all(np.isfinite(v)) and v[:, 1].mean() > -1.0, v[:, 1].mean()
