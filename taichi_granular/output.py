@@ -131,8 +131,11 @@ class RunOutput:
         """The state at which the run-time guard stopped the run: ``failure.npz`` (every field, as
         a checkpoint) and ``failure.vtu`` (for ParaView); the checkpoint keeps the last good state."""
         self._write_state(FAILURE, arrays, counters)
+        self._write_vtu("failure.vtu", arrays, n_material)
+
+    def _write_vtu(self, name: str, arrays: Dict[str, np.ndarray], n_material: int) -> None:
         mesh = particle_mesh(arrays, n_material)
-        atomic_write(self.dir / "failure.vtu", lambda tmp: meshio.write(tmp, mesh, file_format="vtu"))
+        atomic_write(self.dir / name, lambda tmp: meshio.write(tmp, mesh, file_format="vtu"))
 
     def _write_state(self, name: str, arrays: Dict[str, np.ndarray], counters: Dict[str, float]) -> None:
         data = {f"field/{k}": v for k, v in arrays.items()}
@@ -149,8 +152,7 @@ class RunOutput:
         if not self.write_vtu:
             return
         name = frame_name(index)
-        mesh = particle_mesh(arrays, n_material)
-        atomic_write(self.dir / name, lambda tmp: meshio.write(tmp, mesh, file_format="vtu"))
+        self._write_vtu(name, arrays, n_material)
         self.frames.append((time, name))
         atomic_write_text(self.dir / "particles.pvd", pvd_text(self.frames))
 

@@ -9,6 +9,20 @@ GLASS_BEADS = {  # Table 1/2 of [M]
     "solid_fraction_min": 0.5, "grain_compressibility": 1.5e-5, "max_yield_stress": 190.0,
     "regularisation_time": 1.0,
 }
+SAND = {"model": "elastoplastic", "density": 2600.0, "youngs_modulus": 5.0e6, "poisson_ratio": 0.3,
+        "friction_angle_deg": 30.0}  # the elastoplastic tests' sand ([A]'s, E lowered for the CPU)
+HYPOPLASTIC_SAND = {"model": "hypoplastic", "parameter_set": "set2", "grain_density": 2650.0,
+                    "grain_diameter": 2e-3, "initial_void_ratio": 0.897}  # [P] set 2, at its stationary I_e
+
+
+def elastoplastic_numerics(dp, **extra):
+    """The numerics of [A] for small elastoplastic scenes, with ``extra`` keys changed."""
+    data = {"particle_spacing": dp, "smoothing_length_ratio": 1.2, "smoothing_function": "cubic_spline",
+            "integrator": "predictor_corrector", "gradient_correction": "none", "cfl": 0.3,
+            "artificial_viscosity": {"alpha": 1.0, "beta": 1.0}, "density_diffusion": 0.1,
+            "stress_diffusion": 0.1, "particle_shifting": {"coefficient": 0.0}}
+    data.update(extra)
+    return data
 
 
 def layer(height=0.05, length=0.1, dp=0.005, tilt_deg=0.0, material=None, alpha=0.0, end_time=1.0,

@@ -11,13 +11,11 @@ import textwrap
 
 import pytest
 
-from scenes import build, layer
+from scenes import HYPOPLASTIC_SAND, build, layer
 from taichi_granular.config import ConfigError
 from taichi_granular.scheme import Scheme
 from taichi_granular.simulation import Simulation
 
-HYPOPLASTIC = {"model": "hypoplastic", "parameter_set": "set2", "grain_density": 2650.0,
-               "grain_diameter": 2.0e-3, "initial_void_ratio": 0.897, "wave_speed": 80.0}
 
 
 def field_names(data):
@@ -28,7 +26,7 @@ def test_mu_i_scene_allocates_no_stress_tensor_and_no_void_ratio():
     mu_i = field_names(layer(height=0.02, length=0.04))
     assert not {name for name in mu_i if "stress" in name or "void" in name or "density_factor" in name}
     # the same layer under the hypoplastic model does carry them: the check can fail
-    data = layer(height=0.02, length=0.04, material=HYPOPLASTIC)
+    data = layer(height=0.02, length=0.04, material=HYPOPLASTIC_SAND)
     data["walls"][0]["type"] = "extrapolated"
     hypo = field_names(data)
     assert {"frictional_stress", "density_factor", "deviatoric_stress"} <= hypo
@@ -37,7 +35,7 @@ def test_mu_i_scene_allocates_no_stress_tensor_and_no_void_ratio():
 COMPILED = textwrap.dedent("""
     import json, sys
     sys.path.insert(0, {tests!r})
-    from scenes import build, layer
+    from scenes import HYPOPLASTIC_SAND, build, layer
     from taichi_granular import runtime
     from taichi_granular.profiling import compiled_kernels
     from taichi_granular.simulation import Simulation

@@ -6,23 +6,10 @@ import numpy as np
 import pytest
 import taichi as ti
 
-from scenes import lowest_and_rightmost
+from scenes import SAND, elastoplastic_numerics, lowest_and_rightmost
 from taichi_granular.config import scene_from_dict
 from taichi_granular.physics.rheology import ElastoplasticMohrCoulomb
 from taichi_granular.simulation import Simulation
-
-SAND = {"model": "elastoplastic", "density": 2600.0, "youngs_modulus": 5.0e6, "poisson_ratio": 0.3,
-        "friction_angle_deg": 30.0}
-
-
-def numerics(dp, **extra):
-    data = {"particle_spacing": dp, "smoothing_length_ratio": 1.2, "smoothing_function": "cubic_spline",
-            "integrator": "predictor_corrector", "gradient_correction": "none", "cfl": 0.3,
-            "artificial_viscosity": {"alpha": 1.0, "beta": 1.0}, "density_diffusion": 0.1,
-            "stress_diffusion": 0.1, "particle_shifting": {"coefficient": 0.0}}
-    data.update(extra)
-    return data
-
 
 def model_of(dim, material=SAND, bulk_modulus=1.0e5):
     from taichi_granular.config import ElastoplasticMaterial
@@ -116,7 +103,7 @@ def standing_wave_scene(length=0.2, dp=0.005):
         "material": {"model": "elastoplastic", "density": rho, "youngs_modulus": E, "poisson_ratio": 0.0,
                      "friction_angle_deg": 0.0, "cohesion": 1.0e9, "bulk_modulus": E / 3.0},
         "particles": [{"lower": [0.0, 0.0], "upper": [length, 8 * dp], "initial_stress": "zero"}],
-        "numerics": numerics(dp, artificial_viscosity={"alpha": 0.0, "beta": 0.0}, density_diffusion=0.0,
+        "numerics": elastoplastic_numerics(dp, artificial_viscosity={"alpha": 0.0, "beta": 0.0}, density_diffusion=0.0,
                              stress_diffusion=0.0),
         "run": {"end_time": 1.0, "output_interval": 1.0},
     }), math.sqrt(E / rho)
@@ -163,7 +150,7 @@ def impact_scene(speed=5.0, dp=0.005):
         "walls": [{"name": "floor", "type": "dynamic", "point": [0.0, 0.0], "normal": [0.0, 1.0]},
                   {"name": "side", "type": "dynamic", "point": [0.06, 0.0], "normal": [-1.0, 0.0],
                    "lower": [0.0, -0.02], "upper": [0.08, 0.12]}],
-        "numerics": numerics(dp),
+        "numerics": elastoplastic_numerics(dp),
         "run": {"end_time": 0.04, "output_interval": 0.04},
     })
 
@@ -202,7 +189,7 @@ def test_layer_on_a_slope_below_the_friction_angle_holds():
         "material": SAND,
         "particles": [{"lower": [0.0, 0.0], "upper": [0.1, 0.04]}],
         "walls": [{"name": "floor", "type": "dynamic", "point": [0.0, 0.0], "normal": [0.0, 1.0]}],
-        "numerics": numerics(0.005),
+        "numerics": elastoplastic_numerics(0.005),
         "run": {"end_time": 0.5, "output_interval": 0.1},
     })
     sim = Simulation(scene)
@@ -284,7 +271,7 @@ def test_artificial_stress_opposes_only_the_tensile_principal_stress():
         "domain": {"lower": [0.0, 0.0], "upper": [0.1, 0.1]},
         "material": {**SAND, "cohesion": 1000.0},
         "particles": [{"lower": [0.03, 0.03], "upper": [0.06, 0.06], "initial_stress": "zero"}],
-        "numerics": numerics(0.005, artificial_stress={"epsilon": 0.3}),
+        "numerics": elastoplastic_numerics(0.005, artificial_stress={"epsilon": 0.3}),
         "run": {"end_time": 0.01, "output_interval": 0.01},
     }
     sim = Simulation(scene_from_dict(base))
@@ -308,5 +295,5 @@ def test_artificial_stress_opposes_only_the_tensile_principal_stress():
     sim.state.deviatoric_stress.from_numpy(np.zeros((n, 2, 2)))
     stage.tensor()
     assert np.all(sim.state.artificial_stress.to_numpy() == 0.0)
-    off = {**base, "numerics": numerics(0.005)}
+    off = {**base, "numerics": elastoplastic_numerics(0.005)}
     assert "artificial_stress" not in [s.name for s in Simulation(scene_from_dict(off)).scheme.rate_stages]

@@ -5,11 +5,9 @@ import math
 import numpy as np
 import pytest
 
-from scenes import build, layer
+from scenes import HYPOPLASTIC_SAND, build, layer
 from taichi_granular.validation import inclined_plane as ip
 
-HYPOPLASTIC_SAND = {"model": "hypoplastic", "parameter_set": "set2", "grain_density": 2650.0,
-                    "grain_diameter": 2e-3, "initial_void_ratio": 0.897}
 
 
 def plane(bulk_viscosity, height=0.012, tilt_deg=28.0, end_time=0.1):

@@ -9,7 +9,7 @@ import pytest
 from taichi_granular.config import scene_from_dict
 from taichi_granular.simulation import Simulation, SimulationError
 
-from test_elastoplastic import SAND, numerics
+from scenes import SAND, elastoplastic_numerics
 
 STRONG_SAND = {**SAND, "friction_angle_deg": 45.0}  # shears less readily than it slides on the wall
 
@@ -27,7 +27,7 @@ def sliding_layer(tilt_deg, delta_deg, speed=0.0, end_time=0.2, outflow=False, l
                        "velocity": [speed, 0.0]}],
         "walls": [{"name": "floor", "type": "dynamic", "point": [0.0, 0.0], "normal": [0.0, 1.0],
                    "friction_angle_deg": delta_deg}],
-        "numerics": numerics(0.005),
+        "numerics": elastoplastic_numerics(0.005),
         "run": {"end_time": end_time, "output_interval": end_time},
     })
 

@@ -1,13 +1,10 @@
 """Small hard cases of the stability suite, one builder per case, every model (issue: stability)."""
 import numpy as np
 
-from scenes import build, layer
+from scenes import HYPOPLASTIC_SAND, SAND, build, elastoplastic_numerics, layer
 
 G = 9.81
-HYPOPLASTIC = {"model": "hypoplastic", "parameter_set": "set2", "grain_density": 2650.0, "grain_diameter": 1e-3,
-               "initial_void_ratio": 0.75}
-ELASTOPLASTIC = {"model": "elastoplastic", "density": 2600.0, "youngs_modulus": 5.0e6, "poisson_ratio": 0.3,
-                 "friction_angle_deg": 30.0}
+HYPOPLASTIC = {**HYPOPLASTIC_SAND, "grain_diameter": 1e-3, "initial_void_ratio": 0.75}  # dense: I_e ~ 0.77 at rest
 MODELS = ("mu_i", "hypoplastic", "elastoplastic")
 
 
@@ -26,12 +23,9 @@ def settled_layer_data(model: str, height=0.05, length=0.04, dp=0.005):
         data["walls"][0]["type"] = "extrapolated"
         data["numerics"].update(cfl=0.3, gradient_correction="matrix")
         return data
-    data = layer(height=height, length=length, dp=dp, material=ELASTOPLASTIC)
+    data = layer(height=height, length=length, dp=dp, material=SAND)
     data["walls"][0].update(type="dynamic", initial_pressure="overburden")  # at rest from t = 0
-    data["numerics"] = {"particle_spacing": dp, "smoothing_length_ratio": 1.2, "smoothing_function": "cubic_spline",
-                        "integrator": "predictor_corrector", "gradient_correction": "scalar", "cfl": 0.3,
-                        "artificial_viscosity": {"alpha": 1.0, "beta": 1.0}, "density_diffusion": 0.1,
-                        "stress_diffusion": 0.1, "particle_shifting": {"coefficient": 0.0}}
+    data["numerics"] = elastoplastic_numerics(dp, gradient_correction="scalar")
     return data
 
 
