@@ -27,6 +27,9 @@ START_FIELDS = (
 )
 
 
+MAX_SHIFT = 0.1  # largest particle shift in one step, in h (physics/shifting.py)
+
+
 @ti.data_oriented
 class _Update(Stage):
     """Shared kernels: keep the start-of-step state, and x/v/rho updates from it."""
@@ -37,6 +40,7 @@ class _Update(Stage):
     def __init__(self, ctx):
         super().__init__(ctx)
         self.shifting = ctx.scene.numerics.particle_shifting.enabled
+        self.h = ctx.smoothing.h
         self.taylor_velocity = self.shifting and "velocity_gradient" in ctx.state.specs
         # the model's integrated tensors (the elastoplastic deviatoric stress): (field, rate, start)
         self.history = [tuple(ctx.state.field(name) for name in names) for names in ctx.model.history]
@@ -73,6 +77,9 @@ class _Update(Stage):
             x_new = self.state.position_start[i] + 0.5 * dt * (self.state.velocity_start[i] + v_new)
             if ti.static(self.shifting):  # physics/shifting.py: move by dt u_shift, carry v along
                 shift = dt * self.state.shift_velocity[i]
+                length = shift.norm()
+                if length > ti.static(MAX_SHIFT * self.h):
+                    shift *= ti.static(MAX_SHIFT * self.h) / length
                 x_new += shift
                 if ti.static(self.taylor_velocity):
                     v_new += self.state.velocity_gradient[i] @ shift
