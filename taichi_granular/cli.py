@@ -104,6 +104,9 @@ def cmd_bench(args) -> int:
     if args.study == "throughput":
         from .bench.throughput import main as throughput
         return throughput(args)
+    if args.study == "accuracy":
+        from .bench.accuracy import main as accuracy
+        return accuracy(args)
     raise AssertionError(args.study)
 
 
@@ -173,10 +176,17 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=cmd_validate)
 
     p = sub.add_parser("bench", help="benchmarks (timing lives here, never in tests)")
-    p.add_argument("study", choices=["throughput"])
+    p.add_argument("study", choices=["throughput", "accuracy"],
+                   help="throughput: particle-steps/s by size; accuracy: error against cost over resolution "
+                        "and numerics (bench/accuracy.py)")
     p.add_argument("--sizes", type=int, nargs="+", default=[10_000, 40_000, 160_000],
-                   help="approximate particle counts")
-    p.add_argument("--steps", type=int, default=50, help="timed steps per size")
+                   help="throughput: approximate particle counts")
+    p.add_argument("--steps", type=int, default=50, help="throughput: timed steps per size")
+    p.add_argument("--quick", action="store_true", help="accuracy: the few-minute sweep (never rewrites the README)")
+    p.add_argument("--cases", nargs="+", help="accuracy: only cases whose name contains one of these")
+    p.add_argument("--out", help="accuracy: output folder (default renders/accuracy, quick: output/bench/accuracy_quick)")
+    p.add_argument("--timeout", type=float, default=3600.0, help="accuracy: seconds allowed per run")
+    p.add_argument("--no-readme", action="store_true", help="accuracy: do not rewrite the README's study section")
     p.add_argument("--arch", default="cpu")
     p.add_argument("--precision", default="f64", choices=["f32", "f64"])
     p.set_defaults(func=cmd_bench)

@@ -1,0 +1,445 @@
+"""Accuracy against cost (``taichi-granular bench accuracy [--quick]``).
+
+Sweeps cases that have a reference -- the mu(I) inclined plane (analytic profile [M56]), the
+mu(I) column collapse at a = 0.55 and 2.75 (run-out scaling of Lube et al. 2004) and the
+hypoplastic inclined plane (the Bagnold-type profile of MODEL.md section 2) -- over
+
+- resolution: a ladder of particle spacings with the config's numerics, from which the observed
+  convergence order p is fitted (error ~ dp^p, least squares in log-log);
+- one option at a time, at one rung of the ladder (the case's ``option_level``): smoothing
+  function (Wendland C2, Wendland C6, cubic spline), kernel gradient correction (matrix /
+  none), integrator (symplectic Verlet / predictor-corrector), precision (f64 / f32),
+  artificial viscosity (alpha 0 / 0.05) and CFL number.
+
+Every run happens in a fresh process (precision is global in Taichi, and the process's peak
+memory is then the run's own) and reports: its error against the reference, the wall time of
+its steps (the first step, which compiles the kernels, is timed apart as ``compile_seconds``
+and the steps' time extrapolated over it), time steps taken, particle-steps per second,
+seconds per simulated second, peak resident memory of the process and memory of its fields,
+and the share of each stage category (neighbours, density, eos, rheology, forces, walls,
+integration) from the stage profiler (profiling.py, the one behind ``run --profile``), over a
+separately profiled stretch of steps after the run (profiling synchronises around every stage).
+
+Outputs (``--out``): ``accuracy.csv`` (every run), ``accuracy.png`` (error against wall time,
+log-log, one colour per case, each case's Pareto front filled and joined) and ``accuracy.md``
+(the tables the README includes between its ``accuracy-study`` markers; the full study rewrites
+that part of the README, ``--quick`` never does).
+"""
+from __future__ import annotations
+
+import csv
+import io
+import json
+import math
+import subprocess
+import sys
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Dict, List, Optional, Sequence, Tuple
+
+import numpy as np
+
+from ..physics.stage import CATEGORIES
+
+README_START = "<!-- accuracy-study:start (written by taichi-granular bench accuracy) -->"
+README_END = "<!-- accuracy-study:end -->"
+
+# axis -> (option name, overrides) in the order they are tried; the config's own choice is the baseline
+AXES: Dict[str, List[Tuple[str, Tuple[str, ...]]]] = {
+    "smoothing": [(k, (f"numerics.smoothing_function={k}",)) for k in ("wendland_c2", "wendland_c6", "cubic_spline")],
+    "gradient_correction": [(k, (f"numerics.gradient_correction={k}",)) for k in ("matrix", "none")],
+    "integrator": [(k, (f"numerics.integrator={k}",)) for k in ("symplectic_verlet", "predictor_corrector")],
+    "precision": [(k, (f"precision={k}",)) for k in ("f64", "f32")],
+    "artificial_viscosity": [(f"alpha {a:g}", (f"numerics.artificial_viscosity.alpha={a}",)) for a in (0.0, 0.05)],
+    "cfl": [(f"{c:g}", (f"numerics.cfl={c}",)) for c in (0.15, 0.3, 0.5)],
+}
+
+
+@dataclass(frozen=True)
+class Case:
+    """One reference case: a config, the overrides that make it a study case, a ladder of
+    particle spacings and how its error is measured."""
+    name: str
+    model: str
+    config: str  # under configs/
+    reference: str
+    error_name: str
+    measure: str  # "inclined_plane" | "collapse"
+    spacings: Tuple[float, ...]  # m, coarse to fine
+    end_time: float  # s (a collapse stops earlier once at rest)
+    output_interval: float  # s
+    overrides: Tuple[str, ...] = ()
+    option_level: int = 0  # index in ``spacings`` of the one-option-at-a-time runs
+    window: float = 0.0  # inclined plane: the error is averaged over the last ``window`` seconds
+    # the option values tried besides the config's own (a case may leave out what it cannot run)
+    axes: Tuple[str, ...] = tuple(AXES)
+
+    def label(self) -> str:
+        return self.name.replace("_", " ")
+
+
+def _mu_i_plane(spacings, end_time, window, option_level=0):
+    # 0.1 m long instead of 0.2 m (periodic: the uniform flow does not see the length); every
+    # spacing divides the 0.1 m layer and the length
+    return Case("mu_i_inclined_plane", "mu_i", "mu_i/inclined_plane.yaml", "[M56] analytic profile",
+                "velocity relative L2", "inclined_plane", spacings, end_time, 0.05,
+                ("domain.upper=[0.1, 0.3]", "particles.0.upper=[0.1, 0.1]"), option_level, window)
+
+
+def _collapse(aspect, config, spacings, end_time, option_level=0):
+    # the floor's ghost rows need 3 h below y = 0 at the coarsest spacing
+    depth = -3.0 * 1.3 * max(spacings)
+    return Case(f"mu_i_collapse_a{aspect}", "mu_i", config, "Lube et al. (2004) run-out", "run-out relative",
+                "collapse", spacings, end_time, 0.01, (f"domain.lower.1={depth:.4f}",), option_level)
+
+
+def _hypoplastic_plane(spacings, end_time, window, option_level=0):
+    return Case("hypoplastic_inclined_plane", "hypoplastic", "hypoplastic/inclined_plane.yaml",
+                "Bagnold-type profile (MODEL.md 2)", "velocity relative L2", "inclined_plane", spacings, end_time,
+                0.025, (f"domain.lower=[0.0, {-3.0 * 1.3 * max(spacings):.4f}]",), option_level, window)
+
+
+# the full study (what the README quotes) and the quick one (a few minutes on two CPU cores)
+FULL = (
+    _mu_i_plane((0.01, 0.00625, 0.005, 0.003125), 3.0, 1.0, option_level=2),
+    _collapse("0_55", "mu_i/collapse_a0_55.yaml", (0.0088, 0.0066, 0.0044), 0.4, option_level=1),
+    _collapse("2_75", "mu_i/collapse_a2_75.yaml", (0.01944, 0.01458, 0.00972), 0.8, option_level=1),
+    _hypoplastic_plane((0.004, 0.0025, 0.002), 0.5, 0.25, option_level=0),
+)
+QUICK = (
+    _mu_i_plane((0.01, 0.00625, 0.005), 1.0, 0.5),
+    _collapse("0_55", "mu_i/collapse_a0_55.yaml", (0.0088,), 0.4),
+    _collapse("2_75", "mu_i/collapse_a2_75.yaml", (0.01944,), 0.8),
+)
+
+
+# ---- one run (in a child process) ---------------------------------------------------------------
+
+def _error(case: Case, scene, times, frames, diagnostics) -> Tuple[float, str]:
+    """(error, a note) of a run against the case's reference."""
+    if case.measure == "inclined_plane":
+        from ..validation import inclined_plane
+        result = inclined_plane.evaluate(scene, times, frames, window=case.window)
+        return result.velocity_error, f"normal stress {100 * result.pressure_error:.1f} %"
+    from ..validation import column_collapse
+    result = column_collapse.evaluate(scene, times, frames, diagnostics)
+    note = f"a {result.aspect_ratio:.2f}, run-out {result.runout:.3f} vs {result.runout_reference:.3f}"
+    if result.front_stop_time is None:
+        note += ", front still moving at the end"
+    return abs(result.error), note
+
+
+def measure(case: Case, overrides: Sequence[str], profile_steps: int = 200) -> dict:
+    """Run ``case`` with ``overrides`` in this process; the row of the CSV."""
+    import resource
+
+    import taichi as ti
+
+    from ..config import load_scene
+    from ..paths import config_path
+    from ..simulation import Simulation
+    from ..validation.inclined_plane import impose_analytic_velocity
+
+    scene = load_scene(config_path(case.config), [*case.overrides, *overrides,
+                                                 f"run.end_time={case.end_time}",
+                                                 f"run.output_interval={case.output_interval}"])
+    sim = Simulation(scene, progress=False)
+    if case.measure == "inclined_plane":
+        impose_analytic_velocity(sim)  # the steady state is the same from rest, ~15 s further ([M])
+    n = sim.state.n_material
+    is_wall = np.r_[np.zeros(n, int), np.ones(sim.state.n_wall, int)]
+    start = time.perf_counter()
+    sim.run(end_time=0.0)
+    frames, times, diagnostics = [{**sim.scheme.snapshot(), "is_wall": is_wall}], [0.0], []
+    sim.run(max_steps=1)  # compiles the step's kernels
+    ti.sync()
+    compile_seconds = time.perf_counter() - start
+    stepping = 0.0
+    while sim.t < case.end_time - 1e-9:
+        tick = time.perf_counter()
+        sim.run(end_time=min(case.end_time, (round(sim.t / case.output_interval) + 1) * case.output_interval))
+        ti.sync()
+        stepping += time.perf_counter() - tick
+        times.append(sim.t)
+        frames.append({**sim.scheme.snapshot(), "is_wall": is_wall})
+        diagnostics.append(sim.last_diagnostics)
+        if case.measure == "collapse" and sim.at_rest():
+            break
+    steps = sim.step_count
+    wall = stepping * steps / max(1, steps - 1)  # the first step's share, timed with the compilation
+    error, note = _error(case, scene, times, frames, diagnostics)
+    sim.profiler.enabled = True
+    sim.profiler.reset()
+    sim.run(end_time=sim.t + 1e3, max_steps=steps + profile_steps)
+    shares = sim.profiler.by_category()
+    total = sum(shares.values()) or 1.0
+    numerics = scene.numerics
+    return {
+        "case": case.name, "model": case.model, "dp": numerics.particle_spacing, "particles": n,
+        "precision": scene.precision, "smoothing": numerics.smoothing_function,
+        "gradient_correction": numerics.gradient_correction, "integrator": numerics.integrator,
+        "alpha": numerics.artificial_viscosity.alpha, "cfl": numerics.cfl,
+        "error": error, "note": note, "simulated_time": times[-1],
+        "steps": steps, "wall_seconds": wall, "compile_seconds": compile_seconds,
+        "particle_steps_per_second": n * steps / wall if wall > 0 else float("nan"),
+        "seconds_per_simulated_second": wall / times[-1] if times[-1] > 0 else float("nan"),
+        "peak_rss_mib": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0,
+        "field_mib": sim.scheme.memory_bytes() / 2**20,
+        **{f"share_{c}": shares.get(c, 0.0) / total for c in CATEGORIES},
+    }
+
+
+def _child() -> None:
+    """Entry of the child process: a JSON job on stdin, the JSON row on the last stdout line."""
+    job = json.loads(sys.stdin.read())
+    case = Case(**{**job["case"], **{k: tuple(v) for k, v in job["case"].items() if isinstance(v, list)}})
+    row = measure(case, job["overrides"])
+    print("\n" + json.dumps(row))
+
+
+# ---- the sweep -----------------------------------------------------------------------------------
+
+@dataclass
+class Run:
+    case: Case
+    axis: str  # "resolution" or an option axis
+    option: str
+    overrides: Tuple[str, ...]
+    row: dict = field(default_factory=dict)
+
+    @property
+    def ok(self) -> bool:
+        return "error" in self.row and math.isfinite(self.row["error"])
+
+
+def baseline_option(case: Case, axis: str) -> str:
+    """The option a case's config itself uses on ``axis``."""
+    import yaml
+
+    from ..config import apply_overrides, scene_from_dict
+    from ..paths import config_path
+
+    data = apply_overrides(yaml.safe_load(config_path(case.config).read_text()), case.overrides)
+    numerics = scene_from_dict(data).numerics
+    return {"smoothing": numerics.smoothing_function, "gradient_correction": numerics.gradient_correction,
+            "integrator": numerics.integrator, "precision": data.get("precision", "f64"),
+            "artificial_viscosity": f"alpha {numerics.artificial_viscosity.alpha:g}", "cfl": f"{numerics.cfl:g}"}[axis]
+
+
+def plan(cases: Sequence[Case]) -> List[Run]:
+    """The resolution ladder of every case, then each option other than the config's own at the
+    case's option level."""
+    runs = []
+    for case in cases:
+        for dp in case.spacings:
+            runs.append(Run(case, "resolution", f"dp {1e3 * dp:g} mm", (f"numerics.particle_spacing={dp}",)))
+        dp = case.spacings[case.option_level]
+        for axis in case.axes:
+            base = baseline_option(case, axis)
+            for option, overrides in AXES[axis]:
+                if option != base:
+                    runs.append(Run(case, axis, option, (f"numerics.particle_spacing={dp}", *overrides)))
+    return runs
+
+
+def execute(run: Run, timeout: float) -> dict:
+    """Run one point in a fresh Python process; a failed run becomes a row with error NaN and
+    its last message in ``note``."""
+    from dataclasses import asdict
+
+    job = json.dumps({"case": asdict(run.case), "overrides": list(run.overrides)})
+    try:
+        proc = subprocess.run([sys.executable, "-c", "from taichi_granular.bench.accuracy import _child; _child()"],
+                              input=job, capture_output=True, text=True, timeout=timeout)
+    except subprocess.TimeoutExpired:
+        return {"error": float("nan"), "note": f"timed out after {timeout:.0f} s"}
+    lines = [ln for ln in proc.stdout.strip().splitlines() if ln.startswith("{")]
+    if proc.returncode != 0 or not lines:
+        reason = (proc.stderr.strip().splitlines() or ["no output"])[-1]
+        return {"error": float("nan"), "note": f"failed: {reason[:300]}"}
+    return json.loads(lines[-1])
+
+
+# ---- analysis ------------------------------------------------------------------------------------
+
+def pareto_front(points: Sequence[Tuple[float, float]]) -> List[int]:
+    """Indices of the points no other point beats in both coordinates (cost, error)."""
+    front = []
+    for i, (c, e) in enumerate(points):
+        if not any((c2 <= c and e2 <= e) and (c2 < c or e2 < e) for c2, e2 in points):
+            front.append(i)
+    return front
+
+
+def convergence_order(spacings: Sequence[float], errors: Sequence[float]) -> float:
+    """p of error ~ dp^p, least squares of log(error) on log(dp); NaN with fewer than 2 points."""
+    pairs = [(dp, e) for dp, e in zip(spacings, errors) if e > 0 and math.isfinite(e)]
+    if len(pairs) < 2:
+        return float("nan")
+    x, y = np.log([p[0] for p in pairs]), np.log([p[1] for p in pairs])
+    return float(np.polyfit(x, y, 1)[0])
+
+
+def _runs_of(runs, case):
+    return [r for r in runs if r.case is case]
+
+
+def _option_base(runs, case) -> Optional[Run]:
+    """The resolution run at the option level: the baseline the options are compared with."""
+    dp = case.spacings[case.option_level]
+    return next((r for r in _runs_of(runs, case) if r.axis == "resolution" and r.overrides[0].endswith(f"={dp}")), None)
+
+
+def recommendations(runs: Sequence[Run], case: Case) -> List[str]:
+    """Per option axis: whether to keep the config's choice, from error and cost measured against
+    it (an option is worth it when it lowers the error by more than 10 % at less than 1.5 times
+    the cost, or matches the error within 10 % for less cost)."""
+    base = _option_base(runs, case)
+    if base is None or not base.ok:
+        return []
+    lines = []
+    for axis in case.axes:
+        own = baseline_option(case, axis)
+        better = []
+        for r in _runs_of(runs, case):
+            if r.axis != axis or not r.ok:
+                continue
+            e, c = r.row["error"] / base.row["error"], r.row["wall_seconds"] / base.row["wall_seconds"]
+            if (e < 0.9 and c < 1.5) or (e < 1.1 and c < 0.9):
+                better.append((e * c, r.option, e, c))
+        if better:
+            _, option, e, c = min(better)
+            lines.append(f"{axis}: {option} instead of {own} (error x{e:.2f}, cost x{c:.2f})")
+        else:
+            lines.append(f"{axis}: keep {own}")
+    return lines
+
+
+def _pct(x: float) -> str:
+    return f"{100 * x:.2f} %" if math.isfinite(x) else "failed"
+
+
+def markdown(runs: Sequence[Run], cases: Sequence[Case], title: str) -> str:
+    out = io.StringIO()
+    out.write(f"{title}\n\n")
+    out.write("| case | reference | convergence order p (error ~ dp^p) | runs on the Pareto front |\n|---|---|---|---|\n")
+    for case in cases:
+        own = [r for r in _runs_of(runs, case) if r.ok]
+        res = [r for r in own if r.axis == "resolution"]
+        p = convergence_order([r.row["dp"] for r in res], [r.row["error"] for r in res])
+        front = pareto_front([(r.row["wall_seconds"], r.row["error"]) for r in own])
+        names = ", ".join(f"{own[i].option}" + ("" if own[i].axis == "resolution" else f" ({own[i].axis})")
+                          for i in sorted(front, key=lambda i: own[i].row["wall_seconds"]))
+        p_text = f"{p:.2f} ({len(res)} levels)" if math.isfinite(p) else "-"
+        out.write(f"| {case.label()} | {case.reference} | {p_text} | {names} |\n")
+    out.write("\n| case | varied | option | dp mm | particles | error | note | wall s | cost factor | steps | "
+              "particle-steps/s | s per sim s | peak MiB | fields MiB | top stages |\n"
+              "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n")
+    for case in cases:
+        base = _option_base(runs, case)
+        for r in _runs_of(runs, case):
+            row = r.row
+            if not r.ok and "wall_seconds" not in row:
+                out.write(f"| {case.label()} | {r.axis} | {r.option} | | | failed | {row.get('note', '')} "
+                          f"| | | | | | | | |\n")
+                continue
+            factor = "" if r.axis == "resolution" or base is None or not base.ok else \
+                f"x{row['wall_seconds'] / base.row['wall_seconds']:.2f}"
+            top = sorted(((row[f"share_{c}"], c) for c in CATEGORIES), reverse=True)[:3]
+            stages = ", ".join(f"{c} {100 * s:.0f} %" for s, c in top if s > 0)
+            out.write(f"| {case.label()} | {r.axis} | {r.option} | {1e3 * row['dp']:g} | {row['particles']} | "
+                      f"{_pct(row['error'])} | {row['note']} | {row['wall_seconds']:.1f} | {factor} | {row['steps']} | "
+                      f"{row['particle_steps_per_second']:.3g} | {row['seconds_per_simulated_second']:.3g} | "
+                      f"{row['peak_rss_mib']:.0f} | {row['field_mib']:.2f} | {stages} |\n")
+    out.write("\nRecommended per case (from the runs above; an option replaces the config's choice when it "
+              "lowers the error by more than 10 % for less than 1.5 times the cost, or matches it within 10 % "
+              "for less cost):\n\n")
+    for case in cases:
+        lines = recommendations(runs, case)
+        out.write(f"- {case.label()} ({case.model}): " + ("; ".join(lines) if lines else "no baseline run") + "\n")
+    return out.getvalue()
+
+
+COLUMNS = ("case", "model", "axis", "option", "dp", "particles", "precision", "smoothing", "gradient_correction",
+           "integrator", "alpha", "cfl", "error", "note", "simulated_time", "steps", "wall_seconds",
+           "compile_seconds", "particle_steps_per_second", "seconds_per_simulated_second", "peak_rss_mib",
+           "field_mib", *(f"share_{c}" for c in CATEGORIES))
+
+
+def write_outputs(runs: Sequence[Run], cases: Sequence[Case], out: Path, title: str) -> Dict[str, Path]:
+    from ..output import atomic_write_text
+    from ..render.frames import write_png
+    from ..render.plot import plot_pareto
+
+    buf = io.StringIO()
+    writer = csv.DictWriter(buf, COLUMNS, extrasaction="ignore")
+    writer.writeheader()
+    for r in runs:
+        writer.writerow({"case": r.case.name, "model": r.case.model, "axis": r.axis, "option": r.option, **r.row})
+    paths = {"csv": out / "accuracy.csv", "png": out / "accuracy.png", "md": out / "accuracy.md"}
+    atomic_write_text(paths["csv"], buf.getvalue())
+    series = []
+    for case in cases:
+        own = [r for r in _runs_of(runs, case) if r.ok and r.row["error"] > 0]
+        points = [(r.row["wall_seconds"], r.row["error"]) for r in own]
+        if points:
+            series.append((case.label(), points, pareto_front(points)))
+    if series:
+        write_png(paths["png"], plot_pareto(series, "wall time s", "error", "error against wall time"))
+    atomic_write_text(paths["md"], markdown(runs, cases, title))
+    return paths
+
+
+def update_readme(readme: Path, table: str) -> bool:
+    """Replace the text between the README's accuracy-study markers by ``table``."""
+    from ..output import atomic_write_text
+
+    text = readme.read_text()
+    if README_START not in text or README_END not in text:
+        return False
+    head, rest = text.split(README_START, 1)
+    _, tail = rest.split(README_END, 1)
+    atomic_write_text(readme, f"{head}{README_START}\n{table}{README_END}{tail}")
+    return True
+
+
+def sweep(cases: Sequence[Case], out: Path, timeout: float = 3600.0, echo=print) -> List[Run]:
+    runs = plan(cases)
+    echo(f"{len(runs)} runs, one process each -> {out}")
+    for k, run in enumerate(runs, 1):
+        tick = time.perf_counter()
+        run.row = execute(run, timeout)
+        error = run.row.get("error", float("nan"))
+        echo(f"[{k}/{len(runs)}] {run.case.name:<28} {run.axis:<20} {run.option:<20} "
+             f"error {_pct(error):>9}  wall {run.row.get('wall_seconds', float('nan')):8.1f} s  "
+             f"({time.perf_counter() - tick:.0f} s total)  {run.row.get('note', '')}")
+    return runs
+
+
+def study(cases: Sequence[Case], out: Path, title: str, timeout: float = 3600.0, readme: Optional[Path] = None,
+          echo=print) -> Tuple[List[Run], Dict[str, Path]]:
+    """Run the sweep of ``cases``, write the CSV, chart and tables into ``out``, and rewrite the
+    study section of ``readme`` if given."""
+    runs = sweep(cases, out, timeout, echo)
+    title += f" ({len(runs)} runs, {sum(r.row.get('wall_seconds', 0.0) for r in runs):.0f} s of stepping)"
+    paths = write_outputs(runs, cases, out, title)
+    if readme is not None and readme.exists() and update_readme(readme, paths["md"].read_text()):
+        echo(f"README section rewritten: {readme}")
+    return runs, paths
+
+
+def main(args) -> int:
+    from ..paths import REPO
+
+    cases = QUICK if args.quick else FULL
+    if args.cases:
+        cases = tuple(c for c in cases if any(key in c.name for key in args.cases))
+    default = Path("output/bench/accuracy_quick") if args.quick else REPO / "renders" / "accuracy"
+    out = Path(args.out) if args.out else default
+    whole = not args.quick and not args.cases and not args.no_readme
+    runs, paths = study(cases, out, "Quick study" if args.quick else "Full study", args.timeout,
+                        REPO / "README.md" if whole else None)
+    print(paths["md"].read_text())
+    print("outputs: " + ", ".join(str(p) for p in paths.values() if p.exists()))
+    return 0 if all(r.ok for r in runs) else 1
