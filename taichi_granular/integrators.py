@@ -126,7 +126,10 @@ class PredictorCorrector(_Update):
         return self.state.velocity[i]  # x(1/2) = x + dt/2 v(1/2)
 
     def prepare(self, evaluate_rates) -> None:
-        pass
+        """Rates at t = 0, for the first step's stable time step only (the step evaluates its own).
+        Why: the time step reads fields that the rate stages derive (mu(I)'s grain density sets its
+        sound speed); left unset, the first mu(I) step was 1e27 s (measured) and the layer flew apart."""
+        evaluate_rates()
 
     def step(self, dt: float, scheme) -> None:
         scheme.evaluate_rates()

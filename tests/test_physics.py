@@ -98,3 +98,16 @@ def test_layer_at_rest_keeps_hydrostatic_pressure(momentum, correction, h_over_d
         mask = np.isclose(y0, level)
         expected = rho.mean() * g * (H - level)
         assert abs(p[mask].mean() - expected) < tolerance * column_weight, level
+
+
+def test_first_time_step_is_the_same_with_either_integrator():
+    """The first step's dt comes from rates evaluated at t = 0 with both integrators: mu(I)'s sound
+    speed needs the grain density the EOS stage derives (with the predictor-corrector it was
+    unset and the first dt was 1e27 s). Beads at rest: the viscous bound of [M39], 3.2e-5 s."""
+    steps = []
+    for integrator in ("symplectic_verlet", "predictor_corrector"):
+        sim = Simulation(build(layer(height=0.02, length=0.04, integrator=integrator)))
+        sim.run(max_steps=1)
+        steps.append(sim.dt)
+    assert steps[1] == pytest.approx(steps[0], rel=1e-3)
+    assert 1e-6 < steps[0] < 1e-3
