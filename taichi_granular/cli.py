@@ -187,6 +187,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", help="accuracy: output folder (default renders/accuracy, quick: output/bench/accuracy_quick)")
     p.add_argument("--timeout", type=float, default=3600.0, help="accuracy: seconds allowed per run")
     p.add_argument("--no-readme", action="store_true", help="accuracy: do not rewrite the README's study section")
+    p.add_argument("--reuse", action="store_true",
+                   help="accuracy: keep the runs that succeeded in the output folder's accuracy.csv, run the rest")
     p.add_argument("--arch", default="cpu")
     p.add_argument("--precision", default="f64", choices=["f32", "f64"])
     p.set_defaults(func=cmd_bench)

@@ -55,3 +55,6 @@ def test_quick_sweep_on_a_tiny_case_writes_csv_chart_table_and_error_falls_with_
     assert image.ndim == 3 and image.shape[2] == 3
     table = paths["md"].read_text()
     assert "convergence order" in table and "mu i inclined plane" in table and "Recommended" in table
+    # an interrupted or partly failed study continues: runs that succeeded are read back, not re-run
+    again, _ = accuracy.study([tiny], tmp_path, "Tiny study", timeout=1, echo=lambda *a: None, reuse=True)
+    assert [r.row["error"] for r in again] == pytest.approx([float(r["error"]) for r in rows])

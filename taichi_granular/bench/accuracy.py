@@ -404,12 +404,35 @@ def update_readme(readme: Path, table: str) -> bool:
     return True
 
 
-def sweep(cases: Sequence[Case], out: Path, timeout: float = 3600.0, echo=print) -> List[Run]:
+def read_rows(path: Path) -> Dict[Tuple[str, str, str], dict]:
+    """Rows of an earlier ``accuracy.csv`` that ran (error finite), by (case, axis, option), with
+    their numbers as numbers."""
+    if not path.exists():
+        return {}
+    rows = {}
+    with open(path) as fh:
+        for row in csv.DictReader(fh):
+            parsed = {}
+            for key, value in row.items():
+                try:
+                    parsed[key] = int(value) if key in ("particles", "steps") else float(value)
+                except (TypeError, ValueError):
+                    parsed[key] = value
+            if isinstance(parsed.get("error"), float) and math.isfinite(parsed["error"]):
+                rows[(row["case"], row["axis"], row["option"])] = parsed
+    return rows
+
+
+def sweep(cases: Sequence[Case], out: Path, timeout: float = 3600.0, echo=print, reuse: bool = False) -> List[Run]:
+    """Every run of ``plan(cases)``; with ``reuse`` the runs that succeeded in ``out``'s CSV are
+    taken from it (an interrupted or partly failed study continues where it stopped)."""
     runs = plan(cases)
+    earlier = read_rows(out / "accuracy.csv") if reuse else {}
     echo(f"{len(runs)} runs, one process each -> {out}")
     for k, run in enumerate(runs, 1):
         tick = time.perf_counter()
-        run.row = execute(run, timeout)
+        key = (run.case.name, run.axis, run.option)
+        run.row = earlier[key] if key in earlier else execute(run, timeout)
         error = run.row.get("error", float("nan"))
         echo(f"[{k}/{len(runs)}] {run.case.name:<28} {run.axis:<20} {run.option:<20} "
              f"error {_pct(error):>9}  wall {run.row.get('wall_seconds', float('nan')):8.1f} s  "
@@ -418,10 +441,10 @@ def sweep(cases: Sequence[Case], out: Path, timeout: float = 3600.0, echo=print)
 
 
 def study(cases: Sequence[Case], out: Path, title: str, timeout: float = 3600.0, readme: Optional[Path] = None,
-          echo=print) -> Tuple[List[Run], Dict[str, Path]]:
-    """Run the sweep of ``cases``, write the CSV, chart and tables into ``out``, and rewrite the
-    study section of ``readme`` if given."""
-    runs = sweep(cases, out, timeout, echo)
+          echo=print, reuse: bool = False) -> Tuple[List[Run], Dict[str, Path]]:
+    """Run the sweep of ``cases`` (``reuse``: keep the successful runs of ``out``'s CSV), write
+    the CSV, chart and tables into ``out``, and rewrite the study section of ``readme`` if given."""
+    runs = sweep(cases, out, timeout, echo, reuse)
     title += f" ({len(runs)} runs, {sum(r.row.get('wall_seconds', 0.0) for r in runs):.0f} s of stepping)"
     paths = write_outputs(runs, cases, out, title)
     if readme is not None and readme.exists() and update_readme(readme, paths["md"].read_text()):
@@ -439,7 +462,7 @@ def main(args) -> int:
     out = Path(args.out) if args.out else default
     whole = not args.quick and not args.cases and not args.no_readme
     runs, paths = study(cases, out, "Quick study" if args.quick else "Full study", args.timeout,
-                        REPO / "README.md" if whole else None)
+                        REPO / "README.md" if whole else None, reuse=args.reuse)
     print(paths["md"].read_text())
     print("outputs: " + ", ".join(str(p) for p in paths.values() if p.exists()))
     return 0 if all(r.ok for r in runs) else 1
