@@ -32,6 +32,23 @@ def test_plan_varies_one_option_at_a_time_from_the_config():
             ("artificial_viscosity", "alpha 0.05"), ("cfl", "0.3")} <= options
 
 
+def test_recommendation_weighs_error_and_cost_over_a_models_cases():
+    """Two mu(I) cases: Wendland C6 halves the error at 1.2 times the cost in both (preferred);
+    f32 is cheaper and as accurate in one case but failed in the other (never preferred);
+    a CFL of 0.3 costs twice as much for the same error (keep the config's 0.5)."""
+    cases = [replace(c, axes=("smoothing", "precision", "cfl")) for c in accuracy.QUICK[1:]]
+    runs = accuracy.plan(cases)
+    for r in runs:
+        error, cost = {"wendland_c6": (0.5, 1.2), "0.3": (1.0, 2.0), "f32": (1.0, 0.8)}.get(r.option, (1.0, 1.0))
+        if r.option == "f32" and r.case is cases[1]:
+            r.row = {"error": float("nan"), "note": "failed"}
+            continue
+        r.row = {"error": 0.2 * error, "wall_seconds": 10.0 * cost}
+    lines = accuracy.recommendations(runs, cases, "mu_i")
+    assert lines[0].startswith("smoothing: wendland_c6 instead of wendland_c2 (error x0.50, cost x1.20")
+    assert lines[1] == "precision: keep f64" and lines[2] == "cfl: keep 0.5"
+
+
 def test_readme_section_is_replaced_between_its_markers(tmp_path):
     readme = tmp_path / "README.md"
     readme.write_text(f"intro\n{accuracy.README_START}\nold table\n{accuracy.README_END}\noutro\n")
@@ -54,7 +71,7 @@ def test_quick_sweep_on_a_tiny_case_writes_csv_chart_table_and_error_falls_with_
     image = iio.imread(paths["png"])
     assert image.ndim == 3 and image.shape[2] == 3
     table = paths["md"].read_text()
-    assert "convergence order" in table and "mu i inclined plane" in table and "Recommended" in table
+    assert "convergence order" in table and "mu i inclined plane" in table and "Recommended per model" in table
     # an interrupted or partly failed study continues: runs that succeeded are read back, not re-run
     again, _ = accuracy.study([tiny], tmp_path, "Tiny study", timeout=1, echo=lambda *a: None, reuse=True)
     assert [r.row["error"] for r in again] == pytest.approx([float(r["error"]) for r in rows])
