@@ -103,6 +103,9 @@ def _hypoplastic_plane(spacings, end_time, window, option_level=0):
 # the full study (what the README quotes) and the quick one (a few minutes on two CPU cores)
 FULL = (
     _mu_i_plane((0.01, 0.00625, 0.005, 0.003125), 3.0, 1.0, option_level=2),
+    # the steady state: 3 s from the analytic profile do not show a slow drift of the layer
+    # (measured: Wendland C6 looked better at 3 s and compacted the layer by 7 % by 25 s)
+    replace(_mu_i_plane((0.005,), 30.0, 5.0), name="mu_i_inclined_plane_steady", axes=("smoothing",)),
     _collapse("0_55", "mu_i/collapse_a0_55.yaml", (0.0088, 0.0066, 0.0044), 0.4, option_level=1),
     _collapse("2_75", "mu_i/collapse_a2_75.yaml", (0.01944, 0.01458, 0.00972), 0.8, option_level=1),
     _hypoplastic_plane((0.004, 0.0025, 0.002), 0.5, 0.25, option_level=0),
@@ -309,7 +312,9 @@ def recommendations(runs: Sequence[Run], cases: Sequence[Case], model: str) -> L
     """Per option axis, for the cases of ``model``: the option to prefer over the configs' own
     choice, or keep it. An option is preferred when, in the geometric mean over the model's
     cases, it lowers the error by more than 10 % for less than 1.5 times the cost, or keeps it
-    within 10 % for less than 0.9 times the cost, and it ran in every case."""
+    within 10 % for less than 0.8 times the cost (identical runs differed by up to 16 % in wall
+    time beside another job, measured), and it ran in every case and raised no case's error by
+    10 % or more: a default must not break a case it was not chosen for."""
     own_cases = [c for c in cases if c.model == model]
     per_case = [option_ratios(runs, c) for c in own_cases]
     lines = []
@@ -323,7 +328,8 @@ def recommendations(runs: Sequence[Run], cases: Sequence[Case], model: str) -> L
                 continue
             e = math.exp(np.mean([math.log(v[0]) for v in values]))
             c = math.exp(np.mean([math.log(v[1]) for v in values]))
-            if ((e < 0.9 and c < 1.5) or (e < 1.1 and c < 0.9)) and (best is None or e * c < best[0]):
+            worst = max(v[0] for v in values)
+            if ((e < 0.9 and c < 1.5) or (e < 1.1 and c < 0.8)) and worst < 1.1 and (best is None or e * c < best[0]):
                 best = (e * c, option, e, c, len(values))
         if best is None:
             lines.append(f"{axis}: keep {'/'.join(owns)}")
@@ -372,8 +378,8 @@ def markdown(runs: Sequence[Run], cases: Sequence[Case], title: str) -> str:
                       f"{row['peak_rss_mib']:.0f} | {row['field_mib']:.2f} | {stages} |\n")
     out.write("\nRecommended per model, from the option runs above: an option replaces the configs' choice when, "
               "in the geometric mean over the model's cases, it lowers the error by more than 10 % for less than "
-              "1.5 times the cost, or keeps it within 10 % for less than 0.9 times the cost, and it ran in every "
-              "case:\n\n")
+              "1.5 times the cost, or keeps it within 10 % for less than 0.8 times the cost, and it ran in every "
+              "case and raised no case's error by 10 % or more:\n\n")
     for model in dict.fromkeys(c.model for c in cases):
         lines = recommendations(runs, cases, model)
         out.write(f"- {model}: " + ("; ".join(lines) if lines else "no option runs") + "\n")
