@@ -131,6 +131,7 @@ def plot_pareto(series: Sequence[Tuple[str, Sequence[Tuple[float, float]], Seque
         for i in ordered:
             frame.square(*points[i], colour)
         row = frame.top + 8 + 16 * k
-        canvas[row:row + 9, frame.right - 200:frame.right - 191] = colour
-        draw_text(canvas, label, frame.right - 186, row, 2)
+        key = frame.right - 24 - max(text_width(name, 2) for name, _, _ in series)  # the legend fits the frame
+        canvas[row:row + 9, key:key + 9] = colour
+        draw_text(canvas, label, key + 14, row, 2)
     return _to_image(canvas)
