@@ -34,7 +34,8 @@ import math
 import subprocess
 import sys
 import time
-from dataclasses import dataclass, field, replace
+from dataclasses import asdict, dataclass, field, replace
+from functools import lru_cache
 from pathlib import Path
 from typing import Dict, List, Optional, Sequence, Tuple
 
@@ -196,7 +197,7 @@ def measure(case: Case, overrides: Sequence[str], profile_steps: int = 200) -> d
 def _child() -> None:
     """Entry of the child process: a JSON job on stdin, the JSON row on the last stdout line."""
     job = json.loads(sys.stdin.read())
-    case = Case(**{**job["case"], **{k: tuple(v) for k, v in job["case"].items() if isinstance(v, list)}})
+    case = Case(**{k: tuple(v) if isinstance(v, list) else v for k, v in job["case"].items()})
     row = measure(case, job["overrides"])
     print("\n" + json.dumps(row))
 
@@ -208,6 +209,7 @@ class Run:
     case: Case
     axis: str  # "resolution" or an option axis
     option: str
+    dp: float  # particle spacing [m]
     overrides: Tuple[str, ...]
     row: dict = field(default_factory=dict)
 
@@ -216,6 +218,7 @@ class Run:
         return "error" in self.row and math.isfinite(self.row["error"])
 
 
+@lru_cache(maxsize=None)
 def baseline_option(case: Case, axis: str) -> str:
     """The option a case's config itself uses on ``axis``."""
     import yaml
@@ -236,21 +239,19 @@ def plan(cases: Sequence[Case]) -> List[Run]:
     runs = []
     for case in cases:
         for dp in case.spacings:
-            runs.append(Run(case, "resolution", f"dp {1e3 * dp:g} mm", (f"numerics.particle_spacing={dp}",)))
+            runs.append(Run(case, "resolution", f"dp {1e3 * dp:g} mm", dp, (f"numerics.particle_spacing={dp}",)))
         dp = case.spacings[case.option_level]
         for axis in case.axes:
             base = baseline_option(case, axis)
             for option, overrides in AXES[axis]:
                 if option != base:
-                    runs.append(Run(case, axis, option, (f"numerics.particle_spacing={dp}", *overrides)))
+                    runs.append(Run(case, axis, option, dp, (f"numerics.particle_spacing={dp}", *overrides)))
     return runs
 
 
 def execute(run: Run, timeout: float) -> dict:
     """Run one point in a fresh Python process; a failed run becomes a row with error NaN and
     its last message in ``note``."""
-    from dataclasses import asdict
-
     job = json.dumps({"case": asdict(run.case), "overrides": list(run.overrides)})
     try:
         proc = subprocess.run([sys.executable, "-c", "from taichi_granular.bench.accuracy import _child; _child()"],
@@ -291,7 +292,7 @@ def _runs_of(runs, case):
 def _option_base(runs, case) -> Optional[Run]:
     """The resolution run at the option level: the baseline the options are compared with."""
     dp = case.spacings[case.option_level]
-    return next((r for r in _runs_of(runs, case) if r.axis == "resolution" and r.overrides[0].endswith(f"={dp}")), None)
+    return next((r for r in _runs_of(runs, case) if r.axis == "resolution" and r.dp == dp), None)
 
 
 def option_ratios(runs: Sequence[Run], case: Case) -> Dict[Tuple[str, str], Optional[Tuple[float, float]]]:
@@ -347,7 +348,8 @@ def _pct(x: float) -> str:
 def markdown(runs: Sequence[Run], cases: Sequence[Case], title: str) -> str:
     out = io.StringIO()
     out.write(f"{title}\n\n")
-    out.write("| case | reference | convergence order p (error ~ dp^p) | runs on the Pareto front |\n|---|---|---|---|\n")
+    out.write("| case | reference | error | convergence order p (error ~ dp^p) | runs on the Pareto front |\n"
+              "|---|---|---|---|---|\n")
     for case in cases:
         own = [r for r in _runs_of(runs, case) if r.ok]
         res = [r for r in own if r.axis == "resolution"]
@@ -356,7 +358,7 @@ def markdown(runs: Sequence[Run], cases: Sequence[Case], title: str) -> str:
         names = ", ".join(f"{own[i].option}" + ("" if own[i].axis == "resolution" else f" ({own[i].axis})")
                           for i in sorted(front, key=lambda i: own[i].row["wall_seconds"]))
         p_text = f"{p:.2f} ({len(res)} levels)" if math.isfinite(p) else "-"
-        out.write(f"| {case.label()} | {case.reference} | {p_text} | {names} |\n")
+        out.write(f"| {case.label()} | {case.reference} | {case.error_name} | {p_text} | {names} |\n")
     out.write("\n| case | varied | option | dp mm | particles | error | note | wall s | cost factor | steps | "
               "particle-steps/s | s per sim s | peak MiB | fields MiB | top stages |\n"
               "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n")
