@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+import traceback
 from pathlib import Path
 
 from .config import ConfigError, load_scene
@@ -112,6 +113,8 @@ def cmd_bench(args) -> int:
 
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="taichi-granular", description=__doc__)
+    common = argparse.ArgumentParser(add_help=False)
+    common.add_argument("--debug", action="store_true", help="print the traceback of an error")
     sub = parser.add_subparsers(dest="command", required=True)
 
     def scene_args(p):
@@ -119,7 +122,7 @@ def build_parser() -> argparse.ArgumentParser:
         p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                        help="override a scene key, e.g. --set numerics.cfl=0.3 (repeatable)")
 
-    p = sub.add_parser("run", help="run a scene: VTU frames, diagnostics.csv, resolved config")
+    p = sub.add_parser("run", parents=[common], help="run a scene: VTU frames, diagnostics.csv, resolved config")
     scene_args(p)
     p.add_argument("--out", help="output directory (default: run.output_dir or output/<name>)")
     p.add_argument("--end-time", type=float, help="override run.end_time [s]")
@@ -127,7 +130,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=cmd_run)
 
-    p = sub.add_parser("resume", help="continue a run from the checkpoint in its output directory")
+    p = sub.add_parser("resume", parents=[common], help="continue a run from the checkpoint in its output directory")
     p.add_argument("output_dir", help="the run's output directory (holds checkpoint.npz)")
     p.add_argument("--end-time", type=float, help="run to this time instead of run.end_time [s]")
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
@@ -135,11 +138,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=cmd_resume)
 
-    p = sub.add_parser("describe", help="stage list, fields and memory, time step; runs nothing")
+    p = sub.add_parser("describe", parents=[common], help="stage list, fields and memory, time step; runs nothing")
     scene_args(p)
     p.set_defaults(func=cmd_describe)
 
-    p = sub.add_parser("render", help="re-render a run's saved frames to PNG (and GIF/MP4)")
+    p = sub.add_parser("render", parents=[common], help="re-render a run's saved frames to PNG (and GIF/MP4)")
     p.add_argument("output_dir", help="a run's output directory (holds particles.pvd)")
     p.add_argument("--colour-by", help="particle field (speed, pressure, inertial_number, ...)")
     p.add_argument("--range", type=float, nargs=2, metavar=("MIN", "MAX"), help="fixed colour range")
@@ -157,7 +160,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--arch", default="cpu", help="Taichi backend for rasterising")
     p.set_defaults(func=cmd_render)
 
-    p = sub.add_parser("validate", help="run a validation case and print its errors")
+    p = sub.add_parser("validate", parents=[common], help="run a validation case and print its errors")
     p.add_argument("case", choices=["inclined-plane", "column-collapse", "column-collapse-3d", "pile-collapse",
                                     "stake-rows", "obstacle-flow", "element-tests", "drum"])
     p.add_argument("--resolution", choices=["coarse", "paper"], default="coarse",
@@ -175,7 +178,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=cmd_validate)
 
-    p = sub.add_parser("bench", help="benchmarks (timing lives here, never in tests)")
+    p = sub.add_parser("bench", parents=[common], help="benchmarks (timing lives here, never in tests)")
     p.add_argument("study", choices=["throughput", "accuracy"],
                    help="throughput: particle-steps/s by size; accuracy: error against cost over resolution "
                         "and numerics (bench/accuracy.py)")
@@ -195,25 +198,39 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+# exit codes: 0 done, 1 a bug (an exception nobody expected), 2 a scene or input error,
+# 3 a run stopped by a guard (its failure snapshot written), 130 interrupted (state written)
+EXIT_BUG, EXIT_SCENE, EXIT_GUARD, EXIT_INTERRUPTED = 1, 2, 3, 130
+
+
+def _exit_code(err: BaseException) -> int:
+    from .simulation import ResumeError, SimulationError
+
+    if isinstance(err, SimulationError):
+        return EXIT_GUARD
+    if isinstance(err, (ConfigError, ResumeError, OSError)):  # OSError: a missing file, an unwritable folder
+        return EXIT_SCENE
+    return EXIT_BUG
+
+
 def main(argv=None) -> int:
+    """Run one command; every failure ends as one ``error: ...`` line on stderr and an exit code
+    (traceback only with ``--debug``)."""
     args = build_parser().parse_args(argv)
     try:
         return args.func(args)
-    except ConfigError as err:
-        print(f"error in scene: {err}", file=sys.stderr)
-        return 2
-    except FileNotFoundError as err:
-        print(f"error: {err}", file=sys.stderr)
-        return 2
-    except RuntimeError as err:
-        from .simulation import ResumeError
-        if not isinstance(err, ResumeError):
-            raise
-        print(f"error: {err}", file=sys.stderr)
-        return 2
-    except KeyboardInterrupt:
-        print("\ninterrupted", file=sys.stderr)
-        return 130
+    except KeyboardInterrupt as err:
+        print(f"\ninterrupted{': ' + str(err) if str(err) else ''}", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    except Exception as err:  # noqa: BLE001 - the one place that turns exceptions into messages
+        code = _exit_code(err)
+        if args.debug:
+            traceback.print_exc()
+        message = str(err) if code != EXIT_BUG else (
+            f"internal error, a bug of taichi-granular ({type(err).__name__}: {err}); please report it with "
+            "the output of the same command with --debug")
+        print(f"error: {message}", file=sys.stderr)
+        return code
 
 
 if __name__ == "__main__":

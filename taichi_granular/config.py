@@ -15,6 +15,8 @@ import dataclasses
 import difflib
 import itertools
 import math
+import os
+import re
 import typing
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -33,22 +35,46 @@ class ConfigError(ValueError):
         super().__init__(f"{path}: {message}" if path else message)
 
 
-def _key(doc: str, default: Any = dataclasses.MISSING, unit: str = "") -> Any:
-    """Declare a scene key: its default (none = required), meaning and SI unit."""
-    meta = {"doc": doc, "unit": unit}
+@dataclass(frozen=True)
+class Bounds:
+    """The plausible range of a numeric key, written as an interval: ``"[0, 90)"``, ``"(0, 1e4]"``.
+
+    Every number of a scene (each component of a vector too) is checked against its key's
+    bounds when the scene is loaded, so that a value in the wrong unit (radians for degrees,
+    rpm for rad/s, mm for m) or a typo of a few orders of magnitude is stopped before anything
+    is allocated. The bounds are deliberately wide: they reject what no granular scene means,
+    not what an unusual one might."""
+
+    low: float
+    high: float
+    low_open: bool
+    high_open: bool
+
+    @classmethod
+    def parse(cls, text: str) -> "Bounds":
+        match = re.fullmatch(r"\s*([\[(])\s*([^,\s]+)\s*,\s*([^\])\s]+)\s*([\])])\s*", text)
+        if not match:
+            raise ValueError(f"bounds {text!r} must look like '[0, 90)'")
+        return cls(float(match[2]), float(match[3]), match[1] == "(", match[4] == ")")
+
+    def __contains__(self, value: float) -> bool:
+        above = value > self.low if self.low_open else value >= self.low
+        below = value < self.high if self.high_open else value <= self.high
+        return above and below
+
+    def __str__(self) -> str:
+        return f"{'(' if self.low_open else '['}{self.low:g}, {self.high:g}{')' if self.high_open else ']'}"
+
+
+def _key(doc: str, default: Any = dataclasses.MISSING, unit: str = "", bounds: Optional[str] = None,
+         hint: str = "") -> Any:
+    """Declare a scene key: its default (none = required), meaning, SI unit and, for numbers,
+    the plausible ``bounds`` (:class:`Bounds`; ``hint`` is added to the message of a value
+    outside them, e.g. "degrees, not radians")."""
+    meta = {"doc": doc, "unit": unit, "bounds": Bounds.parse(bounds) if bounds else None, "hint": hint}
     if isinstance(default, (list, dict)):
         raise TypeError("use tuples for defaults")
     return field(default=default, metadata=meta)
-
-
-def _check_friction_angle(path: str, value: Optional[float]) -> None:
-    if value is not None and not 0.0 <= value < 90.0:
-        raise ConfigError(path, f"friction angle {value} must lie in [0, 90) degrees (not radians)")
-
-
-def _positive(path: str, value: float, what: str = "must be > 0") -> None:
-    if not (value > 0 and math.isfinite(value)):
-        raise ConfigError(path, f"{what}, got {value!r}")
 
 
 # --------------------------------------------------------------------------------------------
@@ -60,8 +86,8 @@ def _positive(path: str, value: float, what: str = "must be > 0") -> None:
 class Domain:
     """Axis-aligned box holding every particle (walls included)."""
 
-    lower: Tuple[float, ...] = _key("lower corner of the box", unit="m")
-    upper: Tuple[float, ...] = _key("upper corner of the box", unit="m")
+    lower: Tuple[float, ...] = _key("lower corner of the box", unit="m", bounds="[-1e5, 1e5]")
+    upper: Tuple[float, ...] = _key("upper corner of the box", unit="m", bounds="[-1e5, 1e5]")
     periodic: Tuple[str, ...] = _key("periodic axes, e.g. [x]", ())
     outflow: bool = _key("open faces: material leaving the box is taken out of the flow and counted "
                          "(physics/outflow.py) instead of stopping the run", False)
@@ -95,14 +121,8 @@ class Gravity:
     whose bed normal is the vertical axis of the domain.
     """
 
-    magnitude: float = _key("magnitude of gravitational acceleration", 9.81, "m/s^2")
-    tilt_deg: float = _key("slope angle: tilt of gravity towards +x", 0.0, "deg")
-
-    def check(self, path: str) -> None:
-        if not (self.magnitude >= 0 and math.isfinite(self.magnitude)):
-            raise ConfigError(f"{path}.magnitude", f"must be >= 0, got {self.magnitude}")
-        if not -90.0 < self.tilt_deg < 90.0:
-            raise ConfigError(f"{path}.tilt_deg", f"must lie in (-90, 90) degrees, got {self.tilt_deg}")
+    magnitude: float = _key("magnitude of gravitational acceleration", 9.81, "m/s^2", bounds="[0, 1000]", hint="m/s^2: 9.81 on Earth, up to 100 g in a centrifuge")
+    tilt_deg: float = _key("slope angle: tilt of gravity towards +x", 0.0, "deg", bounds="(-90, 90)", hint="degrees, not radians")
 
     def vector(self, dim: int) -> Tuple[float, ...]:
         t = math.radians(self.tilt_deg)
@@ -117,43 +137,25 @@ class MuIMaterial:
     """mu(I) rheology with compressible grains, Minatti & Paris (2015), MODEL.md section 1."""
 
     model: Literal["mu_i"] = _key("constitutive model")
-    grain_density: float = _key("rho_s0, density of the grain material at zero pressure", unit="kg/m^3")
-    grain_diameter: float = _key("d0, grain diameter at zero pressure", unit="m")
-    static_friction_deg: float = _key("arctan(mu_s), static friction angle [M7]", unit="deg")
-    limit_friction_deg: float = _key("arctan(mu_2), limiting friction angle at large I [M7]", unit="deg")
-    reference_inertial_number: float = _key("I_0 of [M7]", unit="-")
-    solid_fraction_max: float = _key("phi_max, solid fraction at I = 0 [M8]", 0.6, "-")
-    solid_fraction_min: float = _key("phi_min, solid fraction at I = 1 [M8]", 0.5, "-")
-    grain_compressibility: float = _key("K_t, artificial grain compressibility [M41]", unit="1/Pa")
-    max_yield_stress: float = _key("tau_0, largest yield stress expected [M53]", unit="Pa")
-    regularisation_time: float = _key("m_0, regularisation parameter [M48], [M55]", 1.0, "s")
+    grain_density: float = _key("rho_s0, density of the grain material at zero pressure", unit="kg/m^3", bounds="[100, 25000]")
+    grain_diameter: float = _key("d0, grain diameter at zero pressure", unit="m", bounds="(0, 0.05]", hint="metres: 0.5 mm = 0.5e-3")
+    static_friction_deg: float = _key("arctan(mu_s), static friction angle [M7]", unit="deg", bounds="[1, 90)", hint="degrees, not radians, not tan")
+    limit_friction_deg: float = _key("arctan(mu_2), limiting friction angle at large I [M7]", unit="deg", bounds="[1, 90)", hint="degrees, not radians, not tan")
+    reference_inertial_number: float = _key("I_0 of [M7]", unit="-", bounds="[1e-3, 10]", hint="Table 1 of [M]: 0.279-2.65")
+    solid_fraction_max: float = _key("phi_max, solid fraction at I = 0 [M8]", 0.6, "-", bounds="(0, 1]")
+    solid_fraction_min: float = _key("phi_min, solid fraction at I = 1 [M8]", 0.5, "-", bounds="(0, 1)")
+    grain_compressibility: float = _key("K_t, artificial grain compressibility [M41]", unit="1/Pa", bounds="[1e-12, 1e-3]", hint="1/Pa; the papers' K_t lie in 2e-6 to 9e-5")
+    max_yield_stress: float = _key("tau_0, largest yield stress expected [M53]", unit="Pa", bounds="(0, 1e8]")
+    regularisation_time: float = _key("m_0, regularisation parameter [M48], [M55]", 1.0, "s", bounds="(0, 1e4]")
 
     def check(self, path: str) -> None:
-        _positive(f"{path}.grain_density", self.grain_density)
-        if not 100.0 <= self.grain_density <= 25000.0:
-            raise ConfigError(f"{path}.grain_density",
-                              f"{self.grain_density} is not a plausible grain density in kg/m^3")
-        _positive(f"{path}.grain_diameter", self.grain_diameter)
-        if self.grain_diameter > 0.05:
-            raise ConfigError(f"{path}.grain_diameter",
-                              f"{self.grain_diameter} m is not a grain; give it in metres (0.5 mm = 0.5e-3)")
-        for key in ("static_friction_deg", "limit_friction_deg"):
-            value = getattr(self, key)
-            if not 1.0 <= value < 90.0:
-                raise ConfigError(f"{path}.{key}",
-                                  f"friction angle {value} must lie in [1, 90) degrees (not radians, not tan)")
+        """Relations between keys (each key's own range is checked by :func:`check_numbers`)."""
         if not self.limit_friction_deg > self.static_friction_deg:
             raise ConfigError(f"{path}.limit_friction_deg",
                               "mu_2 must exceed mu_s: limit_friction_deg > static_friction_deg")
-        _positive(f"{path}.reference_inertial_number", self.reference_inertial_number)
-        if not 0.0 < self.solid_fraction_max <= 1.0:
-            raise ConfigError(f"{path}.solid_fraction_max", "phi_max must lie in (0, 1]")
-        if not 0.0 < self.solid_fraction_min < self.solid_fraction_max:
+        if not self.solid_fraction_min < self.solid_fraction_max:
             raise ConfigError(f"{path}.solid_fraction_min",
                               "phi_min must lie in (0, phi_max): solid_fraction_min < solid_fraction_max")
-        _positive(f"{path}.grain_compressibility", self.grain_compressibility)
-        _positive(f"{path}.max_yield_stress", self.max_yield_stress)
-        _positive(f"{path}.regularisation_time", self.regularisation_time)
 
     @property
     def mu_s(self) -> float:
@@ -175,30 +177,16 @@ class ElastoplasticMaterial:
     (2008), MODEL.md section 3."""
 
     model: Literal["elastoplastic"] = _key("constitutive model")
-    density: float = _key("rho_0, bulk density of the unstressed material [A5]", unit="kg/m^3")
-    youngs_modulus: float = _key("E, Young's modulus [A6]", unit="Pa")
-    poisson_ratio: float = _key("nu, Poisson's ratio [A6]", unit="-")
-    friction_angle_deg: float = _key("phi, internal friction angle of the Mohr-Coulomb strength", unit="deg")
-    cohesion: float = _key("c of S_f = c + p tan(phi) (0 for dry sand)", 0.0, "Pa")
+    density: float = _key("rho_0, bulk density of the unstressed material [A5]", unit="kg/m^3", bounds="[100, 25000]")
+    youngs_modulus: float = _key("E, Young's modulus [A6]", unit="Pa", bounds="[1e3, 1e12]")
+    poisson_ratio: float = _key("nu, Poisson's ratio [A6]", unit="-", bounds="[0, 0.5)")
+    friction_angle_deg: float = _key("phi, internal friction angle of the Mohr-Coulomb strength", unit="deg", bounds="[0, 90)", hint="degrees, not radians")
+    cohesion: float = _key("c of S_f = c + p tan(phi) (0 for dry sand)", 0.0, "Pa", bounds="[0, 1e8]")
     bulk_modulus: Optional[float] = _key(
-        "K of p = K (rho/rho_0 - 1) [A5]; default 50 rho_0 g H_max, H_max the tallest block", None, "Pa")
+        "K of p = K (rho/rho_0 - 1) [A5]; default 50 rho_0 g H_max, H_max the tallest block", None, "Pa", bounds="(0, 1e12]")
 
     def check(self, path: str) -> None:
-        _positive(f"{path}.density", self.density)
-        if not 100.0 <= self.density <= 25000.0:
-            raise ConfigError(f"{path}.density", f"{self.density} is not a plausible bulk density in kg/m^3")
-        _positive(f"{path}.youngs_modulus", self.youngs_modulus)
-        if self.youngs_modulus < 1e3:
-            raise ConfigError(f"{path}.youngs_modulus", f"{self.youngs_modulus} Pa is implausibly soft; give E in Pa")
-        if not 0.0 <= self.poisson_ratio < 0.5:
-            raise ConfigError(f"{path}.poisson_ratio", f"must lie in [0, 0.5), got {self.poisson_ratio}")
-        if not 0.0 <= self.friction_angle_deg < 90.0:
-            raise ConfigError(f"{path}.friction_angle_deg",
-                              f"friction angle {self.friction_angle_deg} must lie in [0, 90) degrees (not radians)")
-        if not (self.cohesion >= 0.0 and math.isfinite(self.cohesion)):
-            raise ConfigError(f"{path}.cohesion", f"must be >= 0, got {self.cohesion}")
-        if self.bulk_modulus is not None:
-            _positive(f"{path}.bulk_modulus", self.bulk_modulus)
+        """Each key's range is checked by :func:`check_numbers`; no relations between keys."""
 
     @property
     def shear_modulus(self) -> float:
@@ -239,22 +227,22 @@ class HypoplasticMaterial:
     model: Literal["hypoplastic"] = _key("constitutive model")
     parameter_set: Optional[Literal["set1", "set2", "annular"]] = _key(
         "a parameter table of [P] supplying the constants below (set1, set2, annular)", None)
-    grain_density: float = _key("rho_s, density of the grain material", unit="kg/m^3")
-    grain_diameter: float = _key("d, grain diameter of the Bagnold stress", unit="m")
-    initial_void_ratio: float = _key("e_0, void ratio at t = 0 (bulk density rho_s/(1 + e_0))", unit="-")
-    constants: Optional[Tuple[float, ...]] = _key("c1, c2, c3, c4 of the Wu-Bauer-Kolymbas rate law", None, "-")
-    min_void_ratio: Optional[float] = _key("e_min of D_c = (e - e_min)/(e_crt - e_min)", None, "-")
+    grain_density: float = _key("rho_s, density of the grain material", unit="kg/m^3", bounds="[100, 25000]")
+    grain_diameter: float = _key("d, grain diameter of the Bagnold stress", unit="m", bounds="(0, 0.05]", hint="metres: 3 mm = 3e-3")
+    initial_void_ratio: float = _key("e_0, void ratio at t = 0 (bulk density rho_s/(1 + e_0))", unit="-", bounds="(0, 5]")
+    constants: Optional[Tuple[float, ...]] = _key("c1, c2, c3, c4 of the Wu-Bauer-Kolymbas rate law", None, "-", bounds="[-1e5, 1e5]")
+    min_void_ratio: Optional[float] = _key("e_min of D_c = (e - e_min)/(e_crt - e_min)", None, "-", bounds="(0, 5]")
     critical_void_ratio: Optional[Tuple[float, ...]] = _key(
-        "p1, p2, p3 of e_crt = p1 + p2 exp(p3 |tr T_s|), |tr T_s| in kPa, p3 in 1/kPa", None)
+        "p1, p2, p3 of e_crt = p1 + p2 exp(p3 |tr T_s|), |tr T_s| in kPa, p3 in 1/kPa", None, bounds="[-100, 100]")
     density_exponent: Optional[Tuple[float, ...]] = _key(
-        "q1, q2, q3 of a = q1 + q2 exp(q3 |tr T_s|) in I_e = (1 - a) D_c + a, q3 in 1/kPa", None)
-    bagnold_coefficient: Optional[float] = _key("k_v of the collisional (Bagnold) stress", None, "-")
+        "q1, q2, q3 of a = q1 + q2 exp(q3 |tr T_s|) in I_e = (1 - a) D_c + a, q3 in 1/kPa", None, bounds="[-100, 100]")
+    bagnold_coefficient: Optional[float] = _key("k_v of the collisional (Bagnold) stress", None, "-", bounds="[0, 10]")
     dispersion_angle_deg: Optional[float] = _key(
-        "alpha_i, p_v = tau_v/tan(alpha_i) of the Bagnold stress", None, "deg")
+        "alpha_i, p_v = tau_v/tan(alpha_i) of the Bagnold stress", None, "deg", bounds="(0, 90)", hint="degrees, not radians")
     wave_speed: float = _key("c of the time step dt = chi h/c (chi: numerics.cfl) and of the artificial "
-                             "viscosity [P]", 80.0, "m/s")
+                             "viscosity [P]", 80.0, "m/s", bounds="[1, 1e4]", hint="m/s; [P] uses 80")
     tension_guard: float = _key("eps: where tr T_s > -eps, T_s is reset to -(eps/3) I (choice, MODEL.md section 2)",
-                                1.0, "Pa")
+                                1.0, "Pa", bounds="(0, 1e4]", hint="Pa: a few")
 
     def __post_init__(self):
         if self.parameter_set is not None:
@@ -270,14 +258,6 @@ class HypoplasticMaterial:
         for key, n in (("constants", 4), ("critical_void_ratio", 3), ("density_exponent", 3)):
             if len(getattr(self, key)) != n:
                 raise ConfigError(f"{path}.{key}", f"expected {n} numbers, got {len(getattr(self, key))}")
-        _positive(f"{path}.grain_density", self.grain_density)
-        if not 100.0 <= self.grain_density <= 25000.0:
-            raise ConfigError(f"{path}.grain_density", f"{self.grain_density} is not a plausible grain density in kg/m^3")
-        _positive(f"{path}.grain_diameter", self.grain_diameter)
-        if self.grain_diameter > 0.05:
-            raise ConfigError(f"{path}.grain_diameter",
-                              f"{self.grain_diameter} m is not a grain; give it in metres (3 mm = 3e-3)")
-        _positive(f"{path}.min_void_ratio", self.min_void_ratio)
         if not self.initial_void_ratio > self.min_void_ratio:
             raise ConfigError(f"{path}.initial_void_ratio",
                               f"e_0 = {self.initial_void_ratio} must exceed e_min = {self.min_void_ratio}")
@@ -287,13 +267,6 @@ class HypoplasticMaterial:
                               "the exponent (third number, 1/kPa) must be <= 0: e_crt and a fall with pressure")
         if not p1 + p2 > self.min_void_ratio:
             raise ConfigError(f"{path}.critical_void_ratio", "e_crt at zero stress (p1 + p2) must exceed e_min")
-        if not (self.bagnold_coefficient >= 0.0 and math.isfinite(self.bagnold_coefficient)):
-            raise ConfigError(f"{path}.bagnold_coefficient", f"must be >= 0, got {self.bagnold_coefficient}")
-        if not 0.0 < self.dispersion_angle_deg < 90.0:
-            raise ConfigError(f"{path}.dispersion_angle_deg",
-                              f"angle {self.dispersion_angle_deg} must lie in (0, 90) degrees (not radians)")
-        _positive(f"{path}.tension_guard", self.tension_guard, "must be > 0 (a few Pa)")
-        _positive(f"{path}.wave_speed", self.wave_speed)
 
     @property
     def reference_density(self) -> float:
@@ -312,10 +285,10 @@ class AnyMaterial:
 class ParticleBlock:
     """A box filled with material particles on a lattice of spacing dp."""
 
-    lower: Tuple[float, ...] = _key("lower corner of the box", unit="m")
-    upper: Tuple[float, ...] = _key("upper corner of the box", unit="m")
+    lower: Tuple[float, ...] = _key("lower corner of the box", unit="m", bounds="[-1e5, 1e5]")
+    upper: Tuple[float, ...] = _key("upper corner of the box", unit="m", bounds="[-1e5, 1e5]")
     name: str = _key("label used in messages", "block")
-    velocity: Optional[Tuple[float, ...]] = _key("initial velocity (default at rest)", None, "m/s")
+    velocity: Optional[Tuple[float, ...]] = _key("initial velocity (default at rest)", None, "m/s", bounds="[-1000, 1000]", hint="m/s")
     initial_stress: Literal["hydrostatic", "zero"] = _key(
         "hydrostatic: pressure of the overburden of this block; zero: unstressed", "hydrostatic")
     shape: Literal["box", "cylinder"] = _key(
@@ -323,11 +296,11 @@ class ParticleBlock:
         "extent must then be square", "box")
     origin: Optional[Tuple[float, ...]] = _key(
         "lay the box in a local frame with this origin (lower and upper are then local coordinates; "
-        "default: global coordinates)", None, "m")
+        "default: global coordinates)", None, "m", bounds="[-1e5, 1e5]")
     tilt_deg: float = _key("tilt of that frame about y (as obstacles: local x descends a slope of tilt_deg; the "
-                           "hydrostatic pressure then acts along the local z axis)", 0.0, "deg")
+                           "hydrostatic pressure then acts along the local z axis)", 0.0, "deg", bounds="(-90, 90)", hint="degrees, not radians")
     clip_circle: Optional[Tuple[float, ...]] = _key(
-        "2D: [x, y, radius]: keep only the lattice points at least dp/2 inside this circle (a drum's fill)", None, "m")
+        "2D: [x, y, radius]: keep only the lattice points at least dp/2 inside this circle (a drum's fill)", None, "m", bounds="[-1e5, 1e5]")
 
     @property
     def framed(self) -> bool:
@@ -345,8 +318,6 @@ class ParticleBlock:
         _check_vector(f"{path}.upper", self.upper, dim)
         if self.origin is not None:
             _check_vector(f"{path}.origin", self.origin, dim)
-        if not -90.0 < self.tilt_deg < 90.0:
-            raise ConfigError(f"{path}.tilt_deg", f"must lie in (-90, 90) deg, got {self.tilt_deg}")
         if self.shape == "cylinder" and self.framed:
             raise ConfigError(f"{path}.shape", "a cylinder block stands upright in global coordinates (no origin "
                                                "or tilt_deg)")
@@ -361,7 +332,8 @@ class ParticleBlock:
         if self.clip_circle is not None:
             if dim != 2 or len(self.clip_circle) != 3:
                 raise ConfigError(f"{path}.clip_circle", "a 2D scene's [x, y, radius]")
-            _positive(f"{path}.clip_circle[2]", self.clip_circle[2], "the radius must be > 0")
+            if not self.clip_circle[2] > 0.0:
+                raise ConfigError(f"{path}.clip_circle[2]", f"the radius must be > 0, got {self.clip_circle[2]}")
         for a in range(dim):
             if self.upper[a] - self.lower[a] < spacing * (1 - 1e-9):
                 raise ConfigError(f"{path}.upper", f"box thinner than one particle spacing along axis {AXES[a]}")
@@ -386,25 +358,25 @@ class Wall:
     extrapolated from the material at every rate evaluation.
     """
 
-    normal: Tuple[float, ...] = _key("unit normal of the plane, pointing into the material")
-    point: Tuple[float, ...] = _key("a point on the plane", unit="m")
+    normal: Tuple[float, ...] = _key("unit normal of the plane, pointing into the material", bounds="[-1, 1]")
+    point: Tuple[float, ...] = _key("a point on the plane", unit="m", bounds="[-1e5, 1e5]")
     name: str = _key("label used in messages", "wall")
     type: Literal["ghost", "dynamic", "extrapolated"] = _key(
         "boundary model: ghost (mu(I), [M34]-[M36]), dynamic (boundary particles that obey continuity and "
         "the equation of state, Dalrymple & Knio 2001, as in [A]) or extrapolated (boundary particles whose "
         "velocity and stress are extrapolated from the material, as in [P])", "ghost")
-    lower: Optional[Tuple[float, ...]] = _key("lower corner of the box that clips the wall (default domain)", None, "m")
-    upper: Optional[Tuple[float, ...]] = _key("upper corner of the box that clips the wall (default domain)", None, "m")
+    lower: Optional[Tuple[float, ...]] = _key("lower corner of the box that clips the wall (default domain)", None, "m", bounds="[-1e5, 1e5]")
+    upper: Optional[Tuple[float, ...]] = _key("upper corner of the box that clips the wall (default domain)", None, "m", bounds="[-1e5, 1e5]")
     max_velocity_factor: float = _key(
         "beta_max of [M36]; 6 lets the three ghost rows extrapolate a linear profile exactly for the "
-        "first material row (Morris et al. 1997 used 1.5; 1 means zero ghost velocity)", 6.0, "-")
+        "first material row (Morris et al. 1997 used 1.5; 1 means zero ghost velocity)", 6.0, "-", bounds="[1, 100]", hint="beta_max of [M36]")
     ghost_stress: Literal["extrapolated", "mirror"] = _key(
         "mirror: sigma_j = sigma_i as in [M]; extrapolated: the traction on planes parallel to the "
         "wall grows by rho_i g (d_i + d_j) (the static momentum balance across the wall)", "extrapolated")
     friction_angle_deg: Optional[float] = _key(
         "dynamic boundaries: Coulomb friction angle delta between the material and this boundary "
         "(|wall shear force| <= tan(delta) |wall normal force|); default none: the wall resists shear "
-        "only through the stress it carries (physics/walls/dynamic.py)", None, "deg")
+        "only through the stress it carries (physics/walls/dynamic.py)", None, "deg", bounds="[0, 90)", hint="degrees, not radians")
     initial_pressure: Literal["zero", "overburden"] = _key(
         "dynamic boundaries: pressure (and so density, [A5]) of the boundary particles at t = 0: zero "
         "(the reference density, as [A]), or the weight of the material over them (a layer that starts "
@@ -419,15 +391,12 @@ class Wall:
         for key in ("lower", "upper"):
             if getattr(self, key) is not None:
                 _check_vector(f"{path}.{key}", getattr(self, key), dim)
-        if not 1.0 <= self.max_velocity_factor <= 100.0:
-            raise ConfigError(f"{path}.max_velocity_factor", "beta_max must lie in [1, 100] [M36]")
         if self.initial_pressure != "zero" and self.type != "dynamic":
             raise ConfigError(f"{path}.initial_pressure", "only dynamic boundary particles take their pressure "
                                                           "from their density")
         if self.friction_angle_deg is not None and self.type != "dynamic":
             raise ConfigError(f"{path}.friction_angle_deg", "only dynamic walls take a friction angle "
                                                             "(ghost walls are no-slip)")
-        _check_friction_angle(f"{path}.friction_angle_deg", self.friction_angle_deg)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -438,13 +407,13 @@ class _Obstacle:
     below are in that frame."""
 
     name: str = _key("label used in messages", "obstacle")
-    origin: Optional[Tuple[float, ...]] = _key("the local frame's origin (default the global origin)", None, "m")
+    origin: Optional[Tuple[float, ...]] = _key("the local frame's origin (default the global origin)", None, "m", bounds="[-1e5, 1e5]")
     tilt_deg: float = _key("slope of the local x axis below the horizontal (about y; +: x' descends)", 0.0,
-                           "deg")
+                           "deg", bounds="(-90, 90)", hint="degrees, not radians")
     friction_angle_deg: Optional[float] = _key(
         "dynamic boundaries: Coulomb friction angle delta between the material and this boundary "
         "(|wall shear force| <= tan(delta) |wall normal force|); default none: the wall resists shear "
-        "only through the stress it carries (physics/walls/dynamic.py)", None, "deg")
+        "only through the stress it carries (physics/walls/dynamic.py)", None, "deg", bounds="[0, 90)", hint="degrees, not radians")
     dimensions = (3,)
 
     def check(self, path: str, dim: int) -> None:
@@ -453,24 +422,12 @@ class _Obstacle:
                                                f"{' or '.join(map(str, self.dimensions))}")
         if self.origin is not None:
             _check_vector(f"{path}.origin", self.origin, dim)
-        if not -90.0 < self.tilt_deg < 90.0:
-            raise ConfigError(f"{path}.tilt_deg", f"must lie in (-90, 90) deg, got {self.tilt_deg}")
-        _check_friction_angle(f"{path}.friction_angle_deg", self.friction_angle_deg)
-
-    def _positive_keys(self, path: str, *keys: str) -> None:
-        for key in keys:
-            _positive(f"{path}.{key}", getattr(self, key))
 
 
 @dataclass(frozen=True, kw_only=True)
 class ChuteSegment:
-    length: float = _key("length along the slope", unit="m")
-    slope_deg: float = _key("inclination below the horizontal (+: descends along +x)", unit="deg")
-
-    def check(self, path: str) -> None:
-        _positive(f"{path}.length", self.length)
-        if not -90.0 < self.slope_deg < 90.0:
-            raise ConfigError(f"{path}.slope_deg", f"must lie in (-90, 90) deg, got {self.slope_deg}")
+    length: float = _key("length along the slope", unit="m", bounds="(0, 1e4]")
+    slope_deg: float = _key("inclination below the horizontal (+: descends along +x)", unit="deg", bounds="(-90, 90)", hint="degrees, not radians")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -481,19 +438,14 @@ class ChuteObstacle(_Obstacle):
 
     shape: Literal["chute"] = _key("obstacle kind", "chute")
     segments: Tuple[ChuteSegment, ...] = _key("planes from the top down")
-    width: float = _key("width across the chute (3D)", 1.0, "m")
-    side_wall_height: float = _key("height of the side walls above the bed (0: none)", 0.0, "m")
+    width: float = _key("width across the chute (3D)", 1.0, "m", bounds="(0, 1e4]")
+    side_wall_height: float = _key("height of the side walls above the bed (0: none)", 0.0, "m", bounds="[0, 1e4]")
     dimensions = (2, 3)
 
     def check(self, path: str, dim: int) -> None:
         super().check(path, dim)
         if not self.segments:
             raise ConfigError(f"{path}.segments", "a chute needs at least one segment")
-        for k, seg in enumerate(self.segments):
-            seg.check(f"{path}.segments[{k}]")
-        _positive(f"{path}.width", self.width)
-        if self.side_wall_height < 0:
-            raise ConfigError(f"{path}.side_wall_height", f"must be >= 0, got {self.side_wall_height}")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -502,8 +454,8 @@ class BoxObstacle(_Obstacle):
     box)."""
 
     shape: Literal["box"] = _key("obstacle kind", "box")
-    lower: Tuple[float, ...] = _key("lower corner, local frame", unit="m")
-    upper: Tuple[float, ...] = _key("upper corner, local frame", unit="m")
+    lower: Tuple[float, ...] = _key("lower corner, local frame", unit="m", bounds="[-1e5, 1e5]")
+    upper: Tuple[float, ...] = _key("upper corner, local frame", unit="m", bounds="[-1e5, 1e5]")
     dimensions = (2, 3)
 
     def check(self, path: str, dim: int) -> None:
@@ -522,17 +474,16 @@ class PostRowsObstacle(_Obstacle):
     on y = 0; ``staggered`` shifts every other row by half a period (post + gap)."""
 
     shape: Literal["post_rows"] = _key("obstacle kind", "post_rows")
-    post_size: float = _key("side of a square post", unit="m")
-    gap: float = _key("clear gap between neighbouring posts of a row", unit="m")
-    rows: int = _key("number of rows", 1)
-    row_spacing: float = _key("distance between rows along local x (post side included)", 0.0, "m")
-    width: float = _key("span of each row across local y", unit="m")
-    height: float = _key("height of the posts along local z", unit="m")
+    post_size: float = _key("side of a square post", unit="m", bounds="(0, 1e4]")
+    gap: float = _key("clear gap between neighbouring posts of a row", unit="m", bounds="(0, 1e4]")
+    rows: int = _key("number of rows", 1, bounds="[1, 10000]")
+    row_spacing: float = _key("distance between rows along local x (post side included)", 0.0, "m", bounds="[0, 1e4]")
+    width: float = _key("span of each row across local y", unit="m", bounds="(0, 1e4]")
+    height: float = _key("height of the posts along local z", unit="m", bounds="(0, 1e4]")
     staggered: bool = _key("shift every other row by (post_size + gap)/2", False)
 
     def check(self, path: str, dim: int) -> None:
         super().check(path, dim)
-        self._positive_keys(path, "post_size", "gap", "width", "height")
         if self.rows < 1:
             raise ConfigError(f"{path}.rows", f"must be >= 1, got {self.rows}")
         if self.rows > 1 and self.row_spacing < self.post_size:
@@ -545,12 +496,11 @@ class CylinderObstacle(_Obstacle):
     along local z (normal to a chute tilted by ``tilt_deg``)."""
 
     shape: Literal["cylinder"] = _key("obstacle kind", "cylinder")
-    radius: float = _key("radius", unit="m")
-    height: float = _key("height along the local z axis", unit="m")
+    radius: float = _key("radius", unit="m", bounds="(0, 1e4]")
+    height: float = _key("height along the local z axis", unit="m", bounds="(0, 1e4]")
 
     def check(self, path: str, dim: int) -> None:
         super().check(path, dim)
-        self._positive_keys(path, "radius", "height")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -560,13 +510,12 @@ class WedgeObstacle(_Obstacle):
     rear centre at z = height (after Tai et al. 2001)."""
 
     shape: Literal["wedge"] = _key("obstacle kind", "wedge")
-    length: float = _key("tip to rear face along local x", unit="m")
-    width: float = _key("rear face width across local y", unit="m")
-    height: float = _key("rear face height along local z", unit="m")
+    length: float = _key("tip to rear face along local x", unit="m", bounds="(0, 1e4]")
+    width: float = _key("rear face width across local y", unit="m", bounds="(0, 1e4]")
+    height: float = _key("rear face height along local z", unit="m", bounds="(0, 1e4]")
 
     def check(self, path: str, dim: int) -> None:
         super().check(path, dim)
-        self._positive_keys(path, "length", "width", "height")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -576,11 +525,10 @@ class MeshObstacle(_Obstacle):
 
     shape: Literal["mesh"] = _key("obstacle kind", "mesh")
     file: str = _key("mesh file (relative paths: from the scene file's folder)")
-    scale: float = _key("factor from the mesh's units to metres", 1.0, "-")
+    scale: float = _key("factor from the mesh's units to metres", 1.0, "-", bounds="(0, 1e6]")
 
     def check(self, path: str, dim: int) -> None:
         super().check(path, dim)
-        _positive(f"{path}.scale", self.scale)
         if not Path(self.file).is_file():
             raise ConfigError(f"{path}.file", f"no such mesh file: {self.file}")
 
@@ -593,16 +541,12 @@ class DrumObstacle(_Obstacle):
     ([P]): extrapolated boundary particles carrying the drum's velocity."""
 
     shape: Literal["drum"] = _key("obstacle kind", "drum")
-    radius: float = _key("inner radius R of the drum", unit="m")
-    angular_velocity: float = _key("omega, rotation rate, counter-clockwise positive (rad/s, not rpm)", unit="rad/s")
+    radius: float = _key("inner radius R of the drum", unit="m", bounds="(0, 1e3]")
+    angular_velocity: float = _key("omega, rotation rate, counter-clockwise positive (rad/s, not rpm)", unit="rad/s", bounds="[-100, 100]", hint="rad/s, not rpm: 1 rpm = 0.1047 rad/s")
     dimensions = (2,)
 
     def check(self, path: str, dim: int) -> None:
         super().check(path, dim)
-        self._positive_keys(path, "radius")
-        if not (math.isfinite(self.angular_velocity) and abs(self.angular_velocity) <= 100.0):
-            raise ConfigError(f"{path}.angular_velocity", f"{self.angular_velocity} rad/s is implausible (rad/s, "
-                                                          "not rpm: 1 rpm = 0.1047 rad/s)")
         if self.tilt_deg != 0.0:
             raise ConfigError(f"{path}.tilt_deg", "a drum is round: no tilt")
         if self.friction_angle_deg is not None:
@@ -623,14 +567,8 @@ class AnyObstacle:
 class ArtificialViscosity:
     """Monaghan artificial viscosity [M38]; alpha = beta = 0 removes the stage altogether."""
 
-    alpha: float = _key("linear coefficient (0.05 on the inclined plane of [M])", 0.0, "-")
-    beta: float = _key("quadratic coefficient (0 in [M], 1 in [A])", 0.0, "-")
-
-    def check(self, path: str) -> None:
-        for key in ("alpha", "beta"):
-            value = getattr(self, key)
-            if not (value >= 0 and math.isfinite(value)):
-                raise ConfigError(f"{path}.{key}", f"must be >= 0, got {value}")
+    alpha: float = _key("linear coefficient (0.05 on the inclined plane of [M])", 0.0, "-", bounds="[0, 10]")
+    beta: float = _key("quadratic coefficient (0 in [M], 1 in [A])", 0.0, "-", bounds="[0, 10]")
 
     @property
     def enabled(self) -> bool:
@@ -643,14 +581,8 @@ class ArtificialStress:
     models with a stress tensor; epsilon = 0 removes the stage altogether."""
 
     epsilon: float = _key("epsilon of R_a = -epsilon sigma_a/rho^2 for tensile principal stresses (0 = off; "
-                          "Gray et al. use 0.3)", 0.0, "-")
-    exponent: float = _key("n of the weight (W(r)/W(dp))^n", 4.0, "-")
-
-    def check(self, path: str) -> None:
-        if not 0.0 <= self.epsilon <= 1.0:
-            raise ConfigError(f"{path}.epsilon", f"must lie in [0, 1], got {self.epsilon}")
-        if not 1.0 <= self.exponent <= 8.0:
-            raise ConfigError(f"{path}.exponent", f"must lie in [1, 8], got {self.exponent}")
+                          "Gray et al. use 0.3)", 0.0, "-", bounds="[0, 1]")
+    exponent: float = _key("n of the weight (W(r)/W(dp))^n", 4.0, "-", bounds="[1, 8]")
 
     @property
     def enabled(self) -> bool:
@@ -666,17 +598,10 @@ class ParticleShifting:
     coefficient = 0 removes the stage altogether."""
 
     coefficient: float = _key("zeta in dr = -zeta h c dt grad C (0 = off; 0.2 keeps sheared layers ordered)",
-                              0.2, "-")
+                              0.2, "-", bounds="[0, 1]")
     free_surface_threshold: float = _key(
         "particles whose kernel sum (Shepard) falls below this are on the free surface (shift along it only)",
-        0.9, "-")
-
-    def check(self, path: str) -> None:
-        if not (0.0 <= self.coefficient <= 1.0):
-            raise ConfigError(f"{path}.coefficient", f"must lie in [0, 1], got {self.coefficient}")
-        if not (0.5 <= self.free_surface_threshold <= 1.0):
-            raise ConfigError(f"{path}.free_surface_threshold",
-                              f"must lie in [0.5, 1], got {self.free_surface_threshold}")
+        0.9, "-", bounds="[0.5, 1]")
 
     @property
     def enabled(self) -> bool:
@@ -685,11 +610,11 @@ class ParticleShifting:
 
 @dataclass(frozen=True, kw_only=True)
 class Numerics:
-    particle_spacing: float = _key("dp, initial lattice spacing of particles", unit="m")
-    smoothing_length_ratio: float = _key("h/dp", 1.3, "-")
+    particle_spacing: float = _key("dp, initial lattice spacing of particles", unit="m", bounds="[1e-5, 10]", hint="metres")
+    smoothing_length_ratio: float = _key("h/dp", 1.3, "-", bounds="[1, 3]")
     smoothing_function: Literal["wendland_c2", "wendland_c6", "cubic_spline"] = _key(
         "SPH smoothing function (MODEL.md section 0)", "wendland_c2")
-    cfl: float = _key("Courant number of the time step [M39]", 0.5, "-")
+    cfl: float = _key("Courant number of the time step [M39]", 0.5, "-", bounds="(0, 1]", hint="a stable explicit step")
     integrator: Literal["symplectic_verlet", "predictor_corrector"] = _key(
         "time integration scheme", "symplectic_verlet")
     momentum: Literal["stress_divergence", "viscous_pair"] = _key(
@@ -700,39 +625,21 @@ class Numerics:
         "free surfaces), scalar d/tr(M), or none", "matrix")
     artificial_viscosity: ArtificialViscosity = _key("Monaghan artificial viscosity [M38]", ArtificialViscosity())
     density_diffusion: float = _key(
-        "delta of the delta-SPH density diffusion term in the continuity equation (0 = off)", 0.02, "-")
+        "delta of the delta-SPH density diffusion term in the continuity equation (0 = off)", 0.02, "-", bounds="[0, 1]")
     stress_diffusion: float = _key(
         "delta_s of the diffusion of integrated stress tensors (physics/stress_diffusion.py; 0 = off; "
-        "models with a stress history only)", 0.0, "-")
+        "models with a stress history only)", 0.0, "-", bounds="[0, 1]")
     bulk_viscosity: float = _key(
         "alpha_b of a numerical bulk viscosity, T += alpha_b rho c h tr(D) I, that resists compaction and dilation "
-        "but not shear (hypoplastic model only; 0 = off; physics/rheology/hypoplastic.py)", 0.0, "-")
+        "but not shear (hypoplastic model only; 0 = off; physics/rheology/hypoplastic.py)", 0.0, "-", bounds="[0, 5]")
     stress_increment: float = _key(
         "largest relative change |dT_s/dt| dt / |T_s| of the frictional stress in one step, a time-step bound "
-        "(hypoplastic model only; 0 = off; physics/rheology/hypoplastic.py)", 0.0, "-")
+        "(hypoplastic model only; 0 = off; physics/rheology/hypoplastic.py)", 0.0, "-", bounds="[0, 10]")
     particle_shifting: ParticleShifting = _key("particle shifting against particle-scale disorder",
                                                ParticleShifting())
     artificial_stress: ArtificialStress = _key("artificial stress against the tensile instability (models with "
                                                "a stress tensor)", ArtificialStress())
-    min_time_step: float = _key("the run stops if the stable time step falls below this", 1e-9, "s")
-
-    def check(self, path: str) -> None:
-        _positive(f"{path}.particle_spacing", self.particle_spacing)
-        if not 1.0 <= self.smoothing_length_ratio <= 3.0:
-            raise ConfigError(f"{path}.smoothing_length_ratio", "h/dp must lie in [1, 3]")
-        if not 0.0 < self.cfl <= 1.0:
-            raise ConfigError(f"{path}.cfl", f"must lie in (0, 1] for a stable explicit step, got {self.cfl}")
-        _positive(f"{path}.min_time_step", self.min_time_step)
-        self.artificial_viscosity.check(f"{path}.artificial_viscosity")
-        self.particle_shifting.check(f"{path}.particle_shifting")
-        self.artificial_stress.check(f"{path}.artificial_stress")
-        for key in ("density_diffusion", "stress_diffusion"):
-            if not 0.0 <= getattr(self, key) <= 1.0:
-                raise ConfigError(f"{path}.{key}", f"must lie in [0, 1], got {getattr(self, key)}")
-        if not 0.0 <= self.bulk_viscosity <= 5.0:
-            raise ConfigError(f"{path}.bulk_viscosity", f"must lie in [0, 5], got {self.bulk_viscosity}")
-        if not 0.0 <= self.stress_increment <= 10.0:
-            raise ConfigError(f"{path}.stress_increment", f"must lie in [0, 10], got {self.stress_increment}")
+    min_time_step: float = _key("the run stops if the stable time step falls below this", 1e-9, "s", bounds="(0, 0.1]")
 
     @property
     def smoothing_length(self) -> float:
@@ -741,49 +648,55 @@ class Numerics:
 
 @dataclass(frozen=True, kw_only=True)
 class Run:
-    end_time: float = _key("simulated time to reach", unit="s")
-    output_interval: float = _key("simulated time between frames (VTU, diagnostics)", unit="s")
+    end_time: float = _key("simulated time to reach", unit="s", bounds="(0, 1e6]")
+    output_interval: float = _key("simulated time between frames (VTU, diagnostics)", unit="s", bounds="(0, 1e6]")
     output_dir: Optional[str] = _key("where outputs go (default output/<scene name>)", None)
     write_vtu: bool = _key("write a VTU particle file per frame (a .pvd series)", True)
-    max_steps: Optional[int] = _key("stop after this many steps (default: no limit)", None)
+    max_steps: Optional[int] = _key("stop after this many steps (default: no limit)", None, bounds="[1, 1e12]")
     stop_at_rest: Optional[float] = _key(
         "stop once the kinetic energy, checked at each output, has fallen below this fraction of its peak "
-        "(e.g. 1e-3 for a collapse at rest; default: run to end_time)", None, "-")
+        "(e.g. 1e-3 for a collapse at rest; default: run to end_time)", None, "-", bounds="(0, 1)")
     checkpoint_every: int = _key(
         "write the checkpoint (checkpoint.npz, atomically) every this many frames; `taichi-granular resume` "
-        "continues from it", 1)
+        "continues from it", 1, bounds="[1, 1e9]")
     guard: Literal["step", "stage"] = _key(
         "when the run-time guard checks every particle for NaN/Inf, leaving the domain and an implausible "
         "density: after each step, or after every stage of it (names the stage that went wrong; slower)", "step")
 
-    def check(self, path: str) -> None:
-        _positive(f"{path}.end_time", self.end_time)
-        _positive(f"{path}.output_interval", self.output_interval)
-        if self.checkpoint_every < 1:
-            raise ConfigError(f"{path}.checkpoint_every", f"must be a whole number of frames >= 1, got "
-                                                          f"{self.checkpoint_every}")
-        if self.stop_at_rest is not None and not 0.0 < self.stop_at_rest < 1.0:
-            raise ConfigError(f"{path}.stop_at_rest", f"must lie in (0, 1), got {self.stop_at_rest}")
-        if self.max_steps is not None and self.max_steps < 1:
-            raise ConfigError(f"{path}.max_steps", "must be >= 1")
 
 
 @dataclass(frozen=True, kw_only=True)
 class Camera:
     """Pinhole camera of 3D frames."""
 
-    position: Tuple[float, ...] = _key("eye position", unit="m")
-    look_at: Tuple[float, ...] = _key("point at the centre of the image", unit="m")
-    up: Tuple[float, ...] = _key("direction that appears upwards", (0.0, 0.0, 1.0))
-    field_of_view_deg: float = _key("vertical field of view", 40.0, "deg")
+    position: Tuple[float, ...] = _key("eye position", unit="m", bounds="[-1e5, 1e5]")
+    look_at: Tuple[float, ...] = _key("point at the centre of the image", unit="m", bounds="[-1e5, 1e5]")
+    up: Tuple[float, ...] = _key("direction that appears upwards", (0.0, 0.0, 1.0), bounds="[-1e3, 1e3]")
+    field_of_view_deg: float = _key("vertical field of view", 40.0, "deg", bounds="[1, 170]")
 
     def check(self, path: str) -> None:
         for key in ("position", "look_at", "up"):
             _check_vector(f"{path}.{key}", getattr(self, key), 3)
         if math.dist(self.position, self.look_at) == 0.0:
             raise ConfigError(f"{path}.look_at", "must differ from the camera position")
-        if not 1.0 <= self.field_of_view_deg <= 170.0:
-            raise ConfigError(f"{path}.field_of_view_deg", f"must lie in [1, 170] deg, got {self.field_of_view_deg}")
+
+
+BYTES_PER_PARTICLE = 1024  # host + device bytes per particle, with margin (``describe``: 0.3-0.6 KiB of fields)
+BYTES_PER_CELL = 16  # neighbour grid: start, count, cursor, fixed start (int32)
+
+
+def max_particles() -> int:
+    """The most particles this machine's memory holds (at BYTES_PER_PARTICLE each)."""
+    try:
+        memory = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+    except (AttributeError, OSError, ValueError):  # not POSIX: assume 16 GiB
+        memory = 16 * 2**30
+    return int(memory // BYTES_PER_PARTICLE)
+
+
+COLOUR_BAR_MARGIN = 120  # px right of a 2D view for the colour bar and its labels
+MIN_VIEW_PX = 32  # px: the narrowest particle view worth rendering
+MAX_FRAME_PX = 8192  # px: the largest frame side
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -791,21 +704,36 @@ class Render:
     """PNG frames (render/): particles coloured by a field, walls grey, time and colour bar."""
 
     frames: bool = _key("write a PNG frame at every output time of a run", True)
-    width: int = _key("image width", 800, "px")
+    width: int = _key("image width", 800, "px", bounds="[32, 8192]")
     height: Optional[int] = _key("image height (default: 2D from the view's aspect, 3D 3/4 of the width)", None,
-                                 "px")
+                                 "px", bounds="[32, 8192]")
     colour_by: str = _key("particle field to colour by: speed, pressure, inertial_number, any output field "
                           "(vectors by magnitude)", "speed")
-    range: Optional[Tuple[float, float]] = _key("fixed colour range [min, max] (default: each frame's own)", None)
-    view_lower: Optional[Tuple[float, ...]] = _key("2D: lower corner of the view (default domain)", None, "m")
-    view_upper: Optional[Tuple[float, ...]] = _key("2D: upper corner of the view (default domain)", None, "m")
+    range: Optional[Tuple[float, float]] = _key("fixed colour range [min, max] (default: each frame's own)", None, bounds="[-1e15, 1e15]")
+    view_lower: Optional[Tuple[float, ...]] = _key("2D: lower corner of the view (default domain)", None, "m", bounds="[-1e5, 1e5]")
+    view_upper: Optional[Tuple[float, ...]] = _key("2D: upper corner of the view (default domain)", None, "m", bounds="[-1e5, 1e5]")
     camera: Optional[Camera] = _key("3D: camera (default: from the front-left, above the domain)", None)
 
-    def check(self, path: str, dim: int) -> None:
-        if not 32 <= self.width <= 8192:
-            raise ConfigError(f"{path}.width", f"must lie in [32, 8192] px, got {self.width}")
-        if self.height is not None and not 32 <= self.height <= 8192:
-            raise ConfigError(f"{path}.height", f"must lie in [32, 8192] px, got {self.height}")
+    def view_box(self, domain: Domain) -> Tuple[Tuple[float, ...], Tuple[float, ...]]:
+        """2D: the (lower, upper) corners in metres that the frame shows."""
+        return (self.view_lower or domain.lower, self.view_upper or domain.upper)
+
+    def frame_size(self, domain: Domain, dim: int) -> Tuple[int, int, int]:
+        """(frame width, frame height, width of the particle view) in pixels; a 2D frame keeps
+        COLOUR_BAR_MARGIN px on the right for the colour bar and its labels."""
+        if dim == 3:
+            return self.width, self.height or int(0.75 * self.width), self.width
+        view_width = self.width - COLOUR_BAR_MARGIN
+        lower, upper = self.view_box(domain)
+        pixel = (upper[0] - lower[0]) / max(view_width, 1)  # metres per pixel
+        height = self.height or max(2 * COLOUR_BAR_MARGIN, int(math.ceil((upper[1] - lower[1]) / pixel)))
+        return self.width, height, view_width
+
+    def check(self, path: str, dim: int, domain: Domain) -> None:
+        if dim == 2 and self.width < COLOUR_BAR_MARGIN + MIN_VIEW_PX:
+            raise ConfigError(f"{path}.width", f"a 2D frame needs at least {COLOUR_BAR_MARGIN + MIN_VIEW_PX} px: "
+                                               f"{COLOUR_BAR_MARGIN} px for the colour bar and {MIN_VIEW_PX} for the "
+                                               f"particles; got {self.width}")
         if self.range is not None and not self.range[0] < self.range[1]:
             raise ConfigError(f"{path}.range", f"needs min < max, got {list(self.range)}")
         for key in ("view_lower", "view_upper"):
@@ -819,6 +747,10 @@ class Render:
             if dim != 3:
                 raise ConfigError(f"{path}.camera", "only 3D scenes have a camera")
             self.camera.check(f"{path}.camera")
+        height = self.frame_size(domain, dim)[1]
+        if height > MAX_FRAME_PX:
+            raise ConfigError(f"{path}.height", f"the view's aspect gives frames {height} px high (at most "
+                                                f"{MAX_FRAME_PX}); set render.height or a narrower view")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -840,12 +772,10 @@ class Scene:
 
     def check(self) -> None:
         dim = self.dimension
-        self.render.check("render", dim)
+        check_numbers(self)
         self.domain.check("domain", dim)
-        self.gravity.check("gravity")
+        self.render.check("render", dim, self.domain)
         self.material.check("material")
-        self.numerics.check("numerics")
-        self.run.check("run")
         dp = self.numerics.particle_spacing
         if dp > min(self.domain.size):
             raise ConfigError("numerics.particle_spacing",
@@ -886,12 +816,33 @@ class Scene:
         if self.material.model == "mu_i" and self.numerics.stress_diffusion > 0.0:
             raise ConfigError("numerics.stress_diffusion", "mu(I) integrates no stress (its stress is algebraic); "
                                                            "set it to 0")
+        self._check_size()
         support = 2.0 * self.numerics.smoothing_length
         for a, name in enumerate(AXES[:dim]):
             if name in self.domain.periodic and self.domain.size[a] < 3 * support:
                 raise ConfigError("domain.periodic",
                                   f"periodic axis {name} spans {self.domain.size[a]} m, less than three kernel "
                                   f"supports (3 x {support} m)")
+
+    def _check_size(self) -> None:
+        """What would not fit in memory fails here, before anything is allocated: the neighbour grid
+        (cells of the kernel support 2h, int32-indexed) and the material blocks' particles.
+        Walls and obstacles are counted where they are laid (scene/geometry.py lattice_counts)."""
+        dp = self.numerics.particle_spacing
+        support = 2.0 * self.numerics.smoothing_length
+        cells = math.prod(max(1, math.floor(size / support)) for size in self.domain.size)
+        if cells > min(2**31 - 2, max_particles() * BYTES_PER_PARTICLE // BYTES_PER_CELL):
+            raise ConfigError("domain.upper", f"the neighbour grid would have {cells:.3g} cells (the domain in "
+                                              f"cells of 2h = {support:g} m), more than this machine holds; shrink "
+                                              "the domain or coarsen numerics.particle_spacing")
+        total = 0
+        for k, block in enumerate(self.particles):
+            count = math.prod(math.floor((hi - lo) / dp + 1e-9) for lo, hi in zip(block.lower, block.upper))
+            total += count
+            if total > max_particles():
+                raise ConfigError(f"particles[{k}]", f"{total:.3g} material particles at dp = {dp:g} m (this block "
+                                                     f"{count:.3g}), more than this machine's memory holds "
+                                                     f"({max_particles():.3g}); coarsen numerics.particle_spacing")
 
     @property
     def gravity_vector(self) -> Tuple[float, ...]:
@@ -945,6 +896,48 @@ def _type_name(value: Any) -> str:
     return type(value).__name__
 
 
+def _number(value: Any, path: str) -> float:
+    """A finite float from a YAML number, or from text that reads as one (PyYAML reads 1e-5,
+    without a dot, as text). NaN and infinity are refused whatever their spelling (.nan, 'nan',
+    'inf', 1e999): no key of a scene means them."""
+    number = None
+    if isinstance(value, (int, float)) and not isinstance(value, bool):
+        number = float(value)
+    elif isinstance(value, str):
+        try:
+            number = float(value)
+        except ValueError:
+            pass
+    if number is None:
+        raise ConfigError(path, f"expected a number, got {_type_name(value)} {value!r}")
+    if not math.isfinite(number):
+        raise ConfigError(path, f"must be a finite number, got {value!r}")
+    return number
+
+
+def check_numbers(section: Any, path: str = "") -> None:
+    """Every number of ``section`` and of the sections below it (vector components included)
+    is finite and lies within its key's bounds (:class:`Bounds`), else a ConfigError naming the
+    key path. Run by :meth:`Scene.check`, so that a scene made in code (``dataclasses.replace``)
+    is held to the same ranges as one read from YAML."""
+    for f in dataclasses.fields(section):
+        value = getattr(section, f.name)
+        sub = _join(path, f.name)
+        items = list(enumerate(value)) if isinstance(value, tuple) else [(None, value)]
+        for k, item in items:
+            item_path = sub if k is None else _join(sub, k)
+            if dataclasses.is_dataclass(item):
+                check_numbers(item, item_path)
+            elif isinstance(item, (int, float)) and not isinstance(item, bool):
+                if not math.isfinite(item):
+                    raise ConfigError(item_path, f"must be a finite number, got {item!r}")
+                bounds = f.metadata.get("bounds")
+                if bounds is not None and item not in bounds:
+                    unit = f" {f.metadata['unit']}" if f.metadata.get("unit", "-") != "-" else ""
+                    hint = f" ({f.metadata['hint']})" if f.metadata.get("hint") else ""
+                    raise ConfigError(item_path, f"{item:g} is outside the plausible range {bounds}{unit}{hint}")
+
+
 def _convert(tp: Any, value: Any, path: str) -> Any:
     origin = typing.get_origin(tp)
     args = typing.get_args(tp)
@@ -974,16 +967,7 @@ def _convert(tp: Any, value: Any, path: str) -> Any:
     if dataclasses.is_dataclass(tp):
         return _load_dataclass(tp, value, path)
     if tp is float:
-        if isinstance(value, bool):
-            raise ConfigError(path, f"expected a number, got {value!r}")
-        if isinstance(value, (int, float)):
-            return float(value)
-        if isinstance(value, str):  # PyYAML reads 1e-5 (no dot) as a string
-            try:
-                return float(value)
-            except ValueError:
-                pass
-        raise ConfigError(path, f"expected a number, got {_type_name(value)} {value!r}")
+        return _number(value, path)
     if tp is int:
         if isinstance(value, bool) or not isinstance(value, int):
             raise ConfigError(path, f"expected an integer, got {_type_name(value)} {value!r}")
@@ -1032,6 +1016,35 @@ def _load_tagged(data: Any, path: str, tag: str, registry: dict) -> Any:
 TAGGED = {AnyMaterial: ("model", MATERIALS), AnyObstacle: ("shape", OBSTACLES)}
 
 
+def _check_duplicate_keys(node: yaml.Node, path: str, source: str) -> None:
+    """Raise on a key given twice in one mapping (PyYAML would keep the last silently)."""
+    if isinstance(node, yaml.MappingNode):
+        seen = {}
+        for key_node, value_node in node.value:
+            key = key_node.value if isinstance(key_node, yaml.ScalarNode) else None
+            if key is not None:
+                line = key_node.start_mark.line + 1
+                if key in seen:
+                    raise ConfigError(_join(path, key), f"given twice in {source}, on lines {seen[key]} and {line}; "
+                                      "keep one")
+                seen[key] = line
+            _check_duplicate_keys(value_node, _join(path, key) if key is not None else path, source)
+    elif isinstance(node, yaml.SequenceNode):
+        for index, item in enumerate(node.value):
+            _check_duplicate_keys(item, _join(path, index), source)
+
+
+def parse_yaml(text: str, path: str = "", source: str = "the scene file") -> Any:
+    """Parse YAML text strictly: syntax errors and duplicated keys are :class:`ConfigError` at ``path``."""
+    try:
+        node = yaml.compose(text, Loader=yaml.SafeLoader)
+        if node is not None:
+            _check_duplicate_keys(node, path, source)
+        return yaml.safe_load(text)
+    except yaml.YAMLError as err:
+        raise ConfigError(path, f"{source} is not valid YAML: {err}") from None
+
+
 def apply_overrides(data: dict, overrides: typing.Iterable[str]) -> dict:
     """Apply ``dotted.key=value`` overrides (values parsed as YAML) to a raw scene mapping; an
     integer key picks an entry of a list (``walls.0.friction_angle_deg=30``)."""
@@ -1051,7 +1064,7 @@ def apply_overrides(data: dict, overrides: typing.Iterable[str]) -> dict:
             elif not isinstance(node, dict):
                 raise ConfigError(path, f"'{keys[depth - 1]}' is not a section")
             if last:
-                node[key] = yaml.safe_load(raw)
+                node[key] = parse_yaml(raw, path, source=f"the value of --set {path}")
             else:
                 node = node.setdefault(key, {}) if isinstance(node, dict) else node[key]
     return data
@@ -1072,9 +1085,10 @@ def load_scene(path: Union[str, Path], overrides: typing.Iterable[str] = ()) -> 
     """Read and validate a YAML scene file; ``overrides`` are ``dotted.key=value`` strings."""
     path = Path(path)
     try:
-        data = yaml.safe_load(path.read_text())
-    except yaml.YAMLError as err:
-        raise ConfigError("", f"{path} is not valid YAML: {err}") from None
+        text = path.read_text()
+    except (OSError, UnicodeDecodeError) as err:
+        raise ConfigError("", f"cannot read the scene file {path}: {err}") from None
+    data = parse_yaml(text, source=str(path))
     if overrides and isinstance(data, dict):
         data = apply_overrides(data, overrides)
     if isinstance(data, dict) and isinstance(data.get("obstacles"), list):  # mesh files: from the scene's folder

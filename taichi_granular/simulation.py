@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import math
+import signal
 import sys
 import time
 from dataclasses import dataclass
@@ -23,6 +24,33 @@ class SimulationError(RuntimeError):
 
 class ResumeError(RuntimeError):
     """A checkpoint that does not fit the scene it is resumed with."""
+
+
+class _Interrupt:
+    """Within ``with``: Ctrl-C (SIGINT) sets ``caught`` instead of raising, so that the run
+    finishes its step and writes the final frame and checkpoint; a second Ctrl-C raises at once.
+    Outside the main thread (no signal handlers there) it does nothing."""
+
+    def __init__(self):
+        self.caught = False
+        self.previous = None
+
+    def _handle(self, signum, frame):
+        if self.caught:
+            raise KeyboardInterrupt
+        self.caught = True
+
+    def __enter__(self):
+        try:
+            self.previous = signal.signal(signal.SIGINT, self._handle)
+        except ValueError:  # not the main thread
+            self.previous = None
+        return self
+
+    def __exit__(self, *exc):
+        if self.previous is not None:
+            signal.signal(signal.SIGINT, self.previous)
+        return False
 
 
 @dataclass
@@ -117,12 +145,19 @@ class Simulation:
             message += "; non-finite fields of this particle: " + ", ".join(broken)
         if self.scene.run.guard == "step":
             message += " (resume from the last checkpoint with --set run.guard=stage to name the stage)"
-        if self.output is not None:
-            self.output.write_failure(arrays, self.counters(), self.state.n_material)
-            message += f"; state written to {self.output.dir / 'failure.npz'} and failure.vtu"
-        raise SimulationError(message)
+        raise SimulationError(self._write_failure(message))
 
-    def write_frame(self) -> None:
+    def _write_failure(self, message: str) -> str:
+        """The whole state to failure.npz / failure.vtu (the last checkpoint untouched); returns
+        ``message`` saying where it went."""
+        if self.output is None:
+            return message
+        self.output.write_failure(self.scheme.snapshot(), self.counters(), self.state.n_material)
+        return message + f"; state written to {self.output.dir / 'failure.npz'} and failure.vtu"
+
+    def write_frame(self, final: bool = False) -> None:
+        """Diagnostics row, VTU frame and PNG of the current state; a checkpoint every
+        ``run.checkpoint_every`` frames and always at the ``final`` frame of a run."""
         diag = self.diagnostics.measure()
         self.peak_kinetic_energy = max(self.peak_kinetic_energy, diag["kinetic_energy"])
         self.last_diagnostics = {"t": self.t, "step": self.step_count, "dt": self.dt, **diag}
@@ -130,7 +165,7 @@ class Simulation:
             arrays = self.scheme.snapshot()
             self.output.write_frame(self.frame_index, self.t, arrays, self.state.n_material)
             self.output.write_diagnostics(self.last_diagnostics)
-            if self.frame_index % self.scene.run.checkpoint_every == 0:
+            if final or self.frame_index % self.scene.run.checkpoint_every == 0:
                 self.output.write_checkpoint({k: arrays[k] for k in self.state.specs}, self.counters())
             if self.renderer is not None:
                 from .render.frames import check_colour_field, png_name, write_png
@@ -170,6 +205,32 @@ class Simulation:
 
     # ---- the loop -----------------------------------------------------------------------------
 
+    def _loop(self, end_time: float, max_steps: Optional[int], next_output: float, progress: Progress,
+              start_steps: int, interrupt: "_Interrupt") -> None:
+        """Steps until end_time, max_steps, rest or Ctrl-C; frames at every output time."""
+        interval = self.scene.run.output_interval
+        min_dt = self.scene.numerics.min_time_step
+        while self.t < end_time * (1 - 1e-12) and not interrupt.caught:
+            if max_steps is not None and self.step_count >= max_steps:
+                break
+            if not self.dt >= min_dt:
+                raise SimulationError(self._write_failure(
+                    f"step {self.step_count}, t = {self.t:.6g} s: stable time step {self.dt:.3g} s fell below "
+                    f"numerics.min_time_step = {min_dt:.3g} s"))
+            dt = min(self.dt, next_output - self.t, end_time - self.t)
+            self.scheme.step(dt, self.t)
+            self.step_count += 1
+            self.t += dt
+            self._check(f"after step {self.step_count}")
+            self.dt = self.scheme.stable_time_step()
+            if self.t >= next_output - 1e-9 * interval:
+                self.write_frame()
+                next_output += interval
+                if self.at_rest():
+                    break
+            progress.update(self.t, self.step_count - start_steps)
+        progress.update(self.t, self.step_count - start_steps, force=True)
+
     def run(self, end_time: Optional[float] = None, max_steps: Optional[int] = None) -> RunSummary:
         scene = self.scene
         end_time = scene.run.end_time if end_time is None else end_time
@@ -186,27 +247,18 @@ class Simulation:
             self.write_frame()
         next_output = (math.floor(self.t / interval + 1e-9) + 1) * interval
         progress = Progress(end_time, self.show_progress)
-        min_dt = scene.numerics.min_time_step
-        while self.t < end_time * (1 - 1e-12):
-            if max_steps is not None and self.step_count >= max_steps:
-                break
-            if not self.dt >= min_dt:
-                raise SimulationError(f"step {self.step_count}, t = {self.t:.6g} s: stable time step "
-                                      f"{self.dt:.3g} s fell below numerics.min_time_step = {min_dt:.3g} s")
-            dt = min(self.dt, next_output - self.t, end_time - self.t)
-            self.scheme.step(dt, self.t)
-            self.step_count += 1
-            self.t += dt
-            self._check(f"after step {self.step_count}")
-            self.dt = self.scheme.stable_time_step()
-            if self.t >= next_output - 1e-9 * interval:
-                self.write_frame()
-                next_output += interval
-                if self.at_rest():
-                    break
-            progress.update(self.t, self.step_count - start_steps)
-        progress.update(self.t, self.step_count - start_steps, force=True)
-        progress.close()
+        interrupt = _Interrupt()
+        with interrupt:
+            try:
+                self._loop(end_time, max_steps, next_output, progress, start_steps, interrupt)
+            finally:
+                progress.close()
+            if self.step_count > start_steps and self.last_diagnostics.get("step") != self.step_count:
+                # stopped between output times (max_steps, end_time off the output grid, Ctrl-C)
+                self.write_frame(final=True)
+        if interrupt.caught:
+            where = f" (state at t = {self.t:.6g} s written to {self.output.dir})" if self.output else ""
+            raise KeyboardInterrupt(f"interrupted at step {self.step_count}{where}")
         wall = time.perf_counter() - wall_start
         steps = self.step_count - start_steps
         n = self.state.n_material

@@ -12,12 +12,11 @@ from typing import Dict, Sequence, Tuple
 
 import numpy as np
 
-from ..config import Scene
+from ..config import COLOUR_BAR_MARGIN, Scene
 from ..output import left_domain
 from .colormap import BACKGROUND, NEUTRAL_GREY, colour_map
 from .font import GLYPH_HEIGHT, draw_text, text_width
 
-COLOUR_BAR_MARGIN = 120  # pixels on the right for the colour bar and its labels
 UNITS = {"speed": "m/s", "velocity": "m/s", "pressure": "pa", "density": "kg/m3", "grain_density": "kg/m3",
          "strain_rate": "1/s", "viscosity": "pa s", "solid_fraction": "-", "inertial_number": "-",
          "acceleration": "m/s2", "grain_diameter": "m"}
@@ -64,16 +63,11 @@ class Renderer:
         self.settings = scene.render
         self.dim = scene.dimension
         s = self.settings
-        self.width = s.width
+        self.width, self.height, self.view_width = s.frame_size(scene.domain, self.dim)
         if self.dim == 2:
-            lower = np.array(s.view_lower if s.view_lower else scene.domain.lower, float)
-            upper = np.array(s.view_upper if s.view_upper else scene.domain.upper, float)
-            self.view_width = self.width - COLOUR_BAR_MARGIN
+            lower, upper = s.view_box(scene.domain)
             self.pixel = float((upper[0] - lower[0]) / self.view_width)  # metres per pixel
-            self.height = s.height or max(2 * COLOUR_BAR_MARGIN, int(math.ceil((upper[1] - lower[1]) / self.pixel)))
             self.left, self.top = float(lower[0]), float(upper[1])
-        else:
-            self.height = s.height or int(0.75 * self.width)
         self._raster = None
 
     # ---- camera (3D) ----------------------------------------------------------------------------

@@ -14,7 +14,7 @@ from typing import Callable, Dict, List
 import numpy as np
 
 from ..config import ConfigError, Scene
-from .geometry import local_axes, obstacle_particles, slab, to_global
+from .geometry import GeometryError, lattice_counts, local_axes, obstacle_particles, slab, to_global
 
 
 @dataclass
@@ -42,10 +42,8 @@ class InitialParticles:
 
 def lattice_box(lower, upper, spacing: float) -> np.ndarray:
     """Cell-centred lattice points of spacing ``spacing`` filling the box [lower, upper]."""
-    axes = []
-    for lo, hi in zip(lower, upper):
-        n = int(math.floor((hi - lo) / spacing + 1e-9))
-        axes.append(lo + (np.arange(n) + 0.5) * spacing)
+    counts = lattice_counts(list(zip(lower, upper)), spacing)
+    axes = [lo + (np.arange(n) + 0.5) * spacing for lo, n in zip(lower, counts)]
     grids = np.meshgrid(*axes, indexing="ij")
     return np.stack([g.ravel() for g in grids], axis=1)
 
@@ -132,7 +130,10 @@ def build_initial(scene: Scene, model) -> InitialParticles:
 
     positions, velocities, pressures, block_of = [], [], [], []
     for k, block in enumerate(scene.particles):
-        pts = lattice_box(block.lower, block.upper, dp)
+        try:
+            pts = lattice_box(block.lower, block.upper, dp)
+        except GeometryError as err:
+            raise ConfigError(f"particles[{k}]", f"the block {err}") from None
         block_g_normal, top = g_normal, block.upper[dim - 1]
         if block.framed:  # lattice and overburden in the block's own frame
             block_g_normal = -float(g @ local_axes(block.tilt_deg, dim)[:, -1])
@@ -169,8 +170,11 @@ def build_initial(scene: Scene, model) -> InitialParticles:
     for w, wall in enumerate(scene.walls):
         lower = wall.lower if wall.lower is not None else scene.domain.lower
         upper = wall.upper if wall.upper is not None else scene.domain.upper
-        pts, depth = wall_lattice(wall.point, wall.normal, lower, upper, dp, layers,
-                                  staggered=wall.type == "dynamic")
+        try:
+            pts, depth = wall_lattice(wall.point, wall.normal, lower, upper, dp, layers,
+                                      staggered=wall.type == "dynamic")
+        except GeometryError as err:
+            raise ConfigError(f"walls[{w}]", f"wall '{wall.name}': {err}") from None
         behind = (x_mat - np.array(wall.point)) @ np.array(wall.normal) < 0
         inside = np.all((x_mat >= np.array(lower) - 1e-12) & (x_mat <= np.array(upper) + 1e-12), axis=1)
         if np.any(behind & inside):
@@ -189,7 +193,10 @@ def build_initial(scene: Scene, model) -> InitialParticles:
         wall_omega.append(np.zeros(len(pts)))
         wall_centre.append(np.zeros((len(pts), dim)))
     for k, obstacle in enumerate(scene.obstacles):
-        pts = obstacle_particles(obstacle, dim, dp, layers)
+        try:
+            pts = obstacle_particles(obstacle, dim, dp, layers)
+        except GeometryError as err:
+            raise ConfigError(f"obstacles[{k}]", f"obstacle '{obstacle.name}': {err}") from None
         if len(pts) == 0:
             raise ConfigError(f"obstacles[{k}]", f"obstacle '{obstacle.name}' holds no particle at this spacing")
         wall_pos.append(pts)

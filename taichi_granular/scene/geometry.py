@@ -23,7 +23,23 @@ from typing import Callable, List, Tuple
 import numpy as np
 
 from ..config import (BoxObstacle, ChuteObstacle, CylinderObstacle, DrumObstacle, MeshObstacle, PostRowsObstacle,
-                      WedgeObstacle)
+                      WedgeObstacle, max_particles)
+
+
+class GeometryError(ValueError):
+    """A solid that cannot be laid as particles (too many for this machine, an unreadable mesh);
+    scene/__init__.py names the scene key it came from."""
+
+
+def lattice_counts(extent, spacing: float) -> List[int]:
+    """Lattice points per axis of spacing ``spacing`` over ``extent`` [(lo, hi), ...]  [m]; raises
+    :class:`GeometryError` before numpy allocates more points than :func:`config.max_particles`."""
+    counts = [max(int(math.floor((hi - lo) / spacing + 1e-9)), 0) for lo, hi in extent]
+    total = math.prod(counts)
+    if total > max_particles():
+        raise GeometryError(f"would lay {total:.3g} particles at dp = {spacing:g} m, more than this machine's "
+                            f"memory holds ({max_particles():.3g}); shrink it or coarsen numerics.particle_spacing")
+    return counts
 
 
 def local_axes(tilt_deg: float, dim: int) -> np.ndarray:
@@ -59,7 +75,9 @@ def slab(extent: List[Tuple[float, float]], spacing: float, layers: int, stagger
     ranges of the others; row l sits at depth (l + 1/2) dp, its points at lo + (k + 1/2) dp
     along the plane, shifted by dp/2 on odd rows when ``staggered`` (Dalrymple & Knio's
     staggered rows: every gap of one row is covered by a particle of the next)."""
-    axes = [np.arange(int(math.floor((hi - lo) / spacing + 1e-9))) for lo, hi in extent]
+    if math.prod(lattice_counts(extent, spacing)) * layers > max_particles():
+        lattice_counts(extent + [(0.0, layers * spacing)], spacing)  # raises, naming the count
+    axes = [np.arange(n) for n in lattice_counts(extent, spacing)]
     rows = []
     for layer in range(layers):
         shift = 0.5 * (layer % 2) if staggered else 0.0
@@ -125,7 +143,7 @@ def solid_shell(inside: Callable[[np.ndarray], np.ndarray], lower, upper, spacin
     within ``layers`` lattice steps of its surface (erosion with the 6-neighbourhood)."""
     lower = np.asarray(lower, float)
     upper = np.asarray(upper, float)
-    counts = [max(int(math.floor((hi - lo) / spacing + 1e-9)), 1) for lo, hi in zip(lower, upper)]
+    counts = [max(n, 1) for n in lattice_counts(list(zip(lower, upper)), spacing)]
     axes = [lo + (np.arange(n) + 0.5) * spacing for lo, n in zip(lower, counts)]
     grids = np.meshgrid(*axes, indexing="ij")
     points = np.stack([g.ravel() for g in grids], axis=1)
@@ -174,7 +192,10 @@ def read_mesh_triangles(path: str, scale: float) -> np.ndarray:
     """Triangles (n, 3, 3) of every triangle and quad cell that meshio reads from ``path``  [m]."""
     import meshio
 
-    mesh = meshio.read(path)
+    try:
+        mesh = meshio.read(path)
+    except Exception as err:  # meshio raises its own ReadError, OSError, ValueError, ... by format
+        raise GeometryError(f"cannot read the mesh {path}: {err}") from None
     pts = np.asarray(mesh.points, float)[:, :3] * scale
     tris = []
     for block in mesh.cells:
@@ -183,7 +204,7 @@ def read_mesh_triangles(path: str, scale: float) -> np.ndarray:
         elif block.type == "quad":
             tris += [block.data[:, [0, 1, 2]], block.data[:, [0, 2, 3]]]
     if not tris:
-        raise ValueError(f"{path}: no triangle or quad cells")
+        raise GeometryError(f"the mesh {path} has no triangle or quad cells")
     return pts[np.concatenate(tris)]
 
 
@@ -213,6 +234,7 @@ def box_inside(lower, upper):
 def drum_particles(radius: float, spacing: float, layers: int) -> np.ndarray:
     """Rings at radii R + (k + 1/2) dp, k < layers, each spaced about dp along its arc and turned
     by half a spacing from the ring inside it (no radial gap lines up), centred at 0  [m]."""
+    lattice_counts([(0.0, 2.0 * math.pi * (radius + layers * spacing))] * 1 + [(0.0, layers * spacing)], spacing)
     rings = []
     for k in range(layers):
         r = radius + (k + 0.5) * spacing
