@@ -28,6 +28,7 @@ START_FIELDS = (
 
 
 MAX_SHIFT = 0.1  # largest particle shift in one step, in h (physics/shifting.py)
+MOMENTUM_BLOCK = 256  # particles per partial sum of the shift's momentum
 
 
 @ti.data_oriented
@@ -44,6 +45,11 @@ class _Update(Stage):
         self.taylor_velocity = self.shifting and "velocity_gradient" in ctx.state.specs
         # the model's integrated tensors (the elastoplastic deviatoric stress): (field, rate, start)
         self.history = [tuple(ctx.state.field(name) for name in names) for names in ctx.model.history]
+        if self.taylor_velocity:  # the Taylor correction's momentum, summed in fixed blocks (deterministic)
+            n_blocks = max(1, -(-ctx.state.n_material // MOMENTUM_BLOCK))
+            self.block_momentum = ti.Vector.field(ctx.state.dim, float, n_blocks)
+            self.block_mass = ti.field(float, n_blocks)
+            self.mean_correction = ti.Vector.field(ctx.state.dim, float, ())
 
     @ti.func
     def wrap(self, i):
@@ -67,22 +73,33 @@ class _Update(Stage):
             self.state.density_start[i] = self.state.density[i]
             self.state.density[i] += 0.5 * dt * self.state.density_rate[i]
 
+    @ti.func
+    def particle_shift(self, i, dt):
+        """dt u_shift of particle i, capped at MAX_SHIFT h  [m] (physics/shifting.py)."""
+        shift = dt * self.state.shift_velocity[i]
+        length = shift.norm()
+        if length > ti.static(MAX_SHIFT * self.h):
+            shift *= ti.static(MAX_SHIFT * self.h) / length
+        return shift
+
+    @ti.func
+    def taylor_correction(self, i, dt):
+        """grad v . delta r: the velocity at the shifted position, to first order  [m/s]."""
+        return self.state.velocity_gradient[i] @ self.particle_shift(i, dt)
+
     @ti.kernel
     def full_step(self, dt: float):
         """v(n+1) = v(n) + dt a; x(n+1) = x(n) + dt (v(n) + v(n+1))/2; rho(n+1) = rho(n) + dt d rho/dt
-        (history fields alike); then the particle shift, if enabled."""
+        (history fields alike); then the particle shift, if enabled: x += delta r and, where the
+        model has a velocity gradient, v += grad v . delta r less its mass-weighted mean, so that
+        the shift moves no momentum (the correction alone would: measured ~1e-3 of the momentum
+        over 1e4 steps of a periodic box)."""
         ti.loop_config(serialize=runtime.serial_loops)
         for i in range(self.state.n_material):
             v_new = self.state.velocity_start[i] + dt * self.state.acceleration[i]
             x_new = self.state.position_start[i] + 0.5 * dt * (self.state.velocity_start[i] + v_new)
             if ti.static(self.shifting):  # physics/shifting.py: move by dt u_shift, carry v along
-                shift = dt * self.state.shift_velocity[i]
-                length = shift.norm()
-                if length > ti.static(MAX_SHIFT * self.h):
-                    shift *= ti.static(MAX_SHIFT * self.h) / length
-                x_new += shift
-                if ti.static(self.taylor_velocity):
-                    v_new += self.state.velocity_gradient[i] @ shift
+                x_new += self.particle_shift(i, dt)
             self.state.position[i] = x_new
             self.state.velocity[i] = v_new
             self.wrap(i)
@@ -91,6 +108,28 @@ class _Update(Stage):
         ti.loop_config(serialize=runtime.serial_loops)
         for i in range(self.state.density_rate.shape[0]):
             self.state.density[i] = self.state.density_start[i] + dt * self.state.density_rate[i]
+        if ti.static(self.taylor_velocity):
+            n = self.state.n_material
+            ti.loop_config(serialize=runtime.serial_loops)
+            for b in range(self.block_mass.shape[0]):  # each block summed in order: the same bits every run
+                momentum = ti.Vector.zero(float, self.state.dim)
+                mass = 0.0
+                for i in range(b * MOMENTUM_BLOCK, ti.min((b + 1) * MOMENTUM_BLOCK, n)):
+                    momentum += self.state.mass[i] * self.taylor_correction(i, dt)
+                    mass += self.state.mass[i]
+                self.block_momentum[b] = momentum
+                self.block_mass[b] = mass
+            ti.loop_config(serialize=True)
+            for _ in range(1):
+                momentum = ti.Vector.zero(float, self.state.dim)
+                mass = 0.0
+                for b in range(self.block_mass.shape[0]):
+                    momentum += self.block_momentum[b]
+                    mass += self.block_mass[b]
+                self.mean_correction[None] = momentum / ti.max(mass, 1e-300)
+            ti.loop_config(serialize=runtime.serial_loops)
+            for i in range(n):
+                self.state.velocity[i] += self.taylor_correction(i, dt) - self.mean_correction[None]
 
 
 @ti.data_oriented

@@ -32,32 +32,35 @@ def test_strain_rate_of_a_linear_field(h_over_dp, tolerance):
 
 
 def test_momentum_is_conserved_to_round_off_in_a_periodic_box():
-    """No gravity, no walls, periodic in x and y: pairwise forces (pressure, viscous, artificial
-    viscosity) change total momentum only by round-off, over hundreds of Verlet steps."""
+    """No gravity, no walls, periodic in x and y, default numerics: pairwise forces (pressure,
+    viscous, artificial viscosity) and the particle shift (its Taylor velocity correction less
+    its mean) change total momentum only by round-off over 10^4 Verlet steps: 6e-16 of |p|
+    measured, against 4e-3 with the uncorrected Taylor term."""
     data = layer(height=0.06, length=0.06, alpha=0.05)
     data["domain"] = {"lower": [0.0, 0.0], "upper": [0.06, 0.06], "periodic": ["x", "y"]}
     data["particles"][0].update(lower=[0.0, 0.0], upper=[0.06, 0.06], initial_stress="zero")
     data["walls"] = []
     data["gravity"]["magnitude"] = 0.0
-    # particle shifting carries velocity by a Taylor correction, which is not pairwise
-    data["numerics"]["particle_shifting"] = {"coefficient": 0.0}
     sim = Simulation(build(data))
     rng = np.random.default_rng(3)
     n = sim.state.n_material
     x = sim.state.position.to_numpy()
     sim.state.position.from_numpy(x + rng.normal(0, 2e-4, x.shape))
-    sim.state.velocity.from_numpy(rng.normal(0, 0.2, x.shape))
+    v0 = rng.normal(0, 0.2, x.shape)
+    sim.state.velocity.from_numpy(v0)
     rho = sim.state.density.to_numpy()
     sim.state.density.from_numpy(rho * (1 + 0.01 * rng.random(n)))  # packed: p > 0
     mass = sim.state.mass.to_numpy()[:, None]
     p0 = (mass * sim.state.velocity.to_numpy()).sum(axis=0)
     scale = (mass * np.abs(sim.state.velocity.to_numpy())).sum()
-    sim.run(end_time=10.0, max_steps=300)
-    assert sim.step_count == 300
+    assert sim.scene.numerics.particle_shifting.enabled
+    sim.run(end_time=100.0, max_steps=10_000)
+    assert sim.step_count == 10_000
     v = sim.state.velocity.to_numpy()
-    assert np.abs(v - sim.state.velocity_start.to_numpy()).max() > 1e-4  # forces did act
+    assert np.abs(v[:n] - v0[:n]).max() > 0.1  # forces did act: the random velocities have mixed
     p1 = (mass * v).sum(axis=0)
     assert np.abs(p1 - p0).max() < 1e-13 * scale
+    assert np.abs(p1 - p0).max() < 1e-10 * np.abs(p0).max()
 
 
 @pytest.mark.parametrize("momentum,correction,h_over_dp,tolerance", [
