@@ -54,6 +54,7 @@ def cmd_render(args) -> int:
 
 def cmd_describe(args) -> int:
     from . import runtime
+    from .mach import describe_lines
     from .scheme import Scheme
 
     scene = load_scene(args.scene, args.set)
@@ -76,6 +77,8 @@ def cmd_describe(args) -> int:
     print(f"total field memory: {scheme.memory_bytes() / 2**20:.2f} MiB")
     scheme.evaluate_rates()
     print(f"estimated time step: {scheme.stable_time_step():.3g} s")
+    for line in describe_lines(scene, scheme.model):
+        print(line)
     return 0
 
 
@@ -187,7 +190,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--steps", type=int, default=50, help="throughput: timed steps per size")
     p.add_argument("--quick", action="store_true", help="accuracy: the few-minute sweep (never rewrites the README)")
     p.add_argument("--cases", nargs="+", help="accuracy: only cases whose name contains one of these")
-    p.add_argument("--out", help="accuracy: output folder (default renders/accuracy, quick: output/bench/accuracy_quick)")
+    p.add_argument("--out",
+                   help="accuracy: output folder (default renders/accuracy, quick: output/bench/accuracy_quick)")
     p.add_argument("--timeout", type=float, default=3600.0, help="accuracy: seconds allowed per run")
     p.add_argument("--no-readme", action="store_true", help="accuracy: do not rewrite the README's study section")
     p.add_argument("--reuse", action="store_true",

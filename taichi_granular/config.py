@@ -121,8 +121,10 @@ class Gravity:
     whose bed normal is the vertical axis of the domain.
     """
 
-    magnitude: float = _key("magnitude of gravitational acceleration", 9.81, "m/s^2", bounds="[0, 1000]", hint="m/s^2: 9.81 on Earth, up to 100 g in a centrifuge")
-    tilt_deg: float = _key("slope angle: tilt of gravity towards +x", 0.0, "deg", bounds="(-90, 90)", hint="degrees, not radians")
+    magnitude: float = _key("magnitude of gravitational acceleration", 9.81, "m/s^2", bounds="[0, 1000]",
+                            hint="m/s^2: 9.81 on Earth, up to 100 g in a centrifuge")
+    tilt_deg: float = _key("slope angle: tilt of gravity towards +x", 0.0, "deg", bounds="(-90, 90)",
+                           hint="degrees, not radians")
 
     def vector(self, dim: int) -> Tuple[float, ...]:
         t = math.radians(self.tilt_deg)
@@ -137,14 +139,20 @@ class MuIMaterial:
     """mu(I) rheology with compressible grains, Minatti & Paris (2015), MODEL.md section 1."""
 
     model: Literal["mu_i"] = _key("constitutive model")
-    grain_density: float = _key("rho_s0, density of the grain material at zero pressure", unit="kg/m^3", bounds="[100, 25000]")
-    grain_diameter: float = _key("d0, grain diameter at zero pressure", unit="m", bounds="(0, 0.05]", hint="metres: 0.5 mm = 0.5e-3")
-    static_friction_deg: float = _key("arctan(mu_s), static friction angle [M7]", unit="deg", bounds="[1, 90)", hint="degrees, not radians, not tan")
-    limit_friction_deg: float = _key("arctan(mu_2), limiting friction angle at large I [M7]", unit="deg", bounds="[1, 90)", hint="degrees, not radians, not tan")
-    reference_inertial_number: float = _key("I_0 of [M7]", unit="-", bounds="[1e-3, 10]", hint="Table 1 of [M]: 0.279-2.65")
+    grain_density: float = _key("rho_s0, density of the grain material at zero pressure", unit="kg/m^3",
+                                bounds="[100, 25000]")
+    grain_diameter: float = _key("d0, grain diameter at zero pressure", unit="m", bounds="(0, 0.05]",
+                                 hint="metres: 0.5 mm = 0.5e-3")
+    static_friction_deg: float = _key("arctan(mu_s), static friction angle [M7]", unit="deg", bounds="[1, 90)",
+                                      hint="degrees, not radians, not tan")
+    limit_friction_deg: float = _key("arctan(mu_2), limiting friction angle at large I [M7]", unit="deg",
+                                     bounds="[1, 90)", hint="degrees, not radians, not tan")
+    reference_inertial_number: float = _key("I_0 of [M7]", unit="-", bounds="[1e-3, 10]",
+                                            hint="Table 1 of [M]: 0.279-2.65")
     solid_fraction_max: float = _key("phi_max, solid fraction at I = 0 [M8]", 0.6, "-", bounds="(0, 1]")
     solid_fraction_min: float = _key("phi_min, solid fraction at I = 1 [M8]", 0.5, "-", bounds="(0, 1)")
-    grain_compressibility: float = _key("K_t, artificial grain compressibility [M41]", unit="1/Pa", bounds="[1e-12, 1e-3]", hint="1/Pa; the papers' K_t lie in 2e-6 to 9e-5")
+    grain_compressibility: float = _key("K_t, artificial grain compressibility [M41]", unit="1/Pa",
+                                        bounds="[1e-12, 1e-3]", hint="1/Pa; the papers' K_t lie in 2e-6 to 9e-5")
     max_yield_stress: float = _key("tau_0, largest yield stress expected [M53]", unit="Pa", bounds="(0, 1e8]")
     regularisation_time: float = _key("m_0, regularisation parameter [M48], [M55]", 1.0, "s", bounds="(0, 1e4]")
 
@@ -180,7 +188,8 @@ class ElastoplasticMaterial:
     density: float = _key("rho_0, bulk density of the unstressed material [A5]", unit="kg/m^3", bounds="[100, 25000]")
     youngs_modulus: float = _key("E, Young's modulus [A6]", unit="Pa", bounds="[1e3, 1e12]")
     poisson_ratio: float = _key("nu, Poisson's ratio [A6]", unit="-", bounds="[0, 0.5)")
-    friction_angle_deg: float = _key("phi, internal friction angle of the Mohr-Coulomb strength", unit="deg", bounds="[0, 90)", hint="degrees, not radians")
+    friction_angle_deg: float = _key("phi, internal friction angle of the Mohr-Coulomb strength", unit="deg",
+                                     bounds="[0, 90)", hint="degrees, not radians")
     cohesion: float = _key("c of S_f = c + p tan(phi) (0 for dry sand)", 0.0, "Pa", bounds="[0, 1e8]")
     bulk_modulus: Optional[float] = _key(
         "K of p = K (rho/rho_0 - 1) [A5]; default 50 rho_0 g H_max, H_max the tallest block", None, "Pa", bounds="(0, 1e12]")
@@ -228,9 +237,12 @@ class HypoplasticMaterial:
     parameter_set: Optional[Literal["set1", "set2", "annular"]] = _key(
         "a parameter table of [P] supplying the constants below (set1, set2, annular)", None)
     grain_density: float = _key("rho_s, density of the grain material", unit="kg/m^3", bounds="[100, 25000]")
-    grain_diameter: float = _key("d, grain diameter of the Bagnold stress", unit="m", bounds="(0, 0.05]", hint="metres: 3 mm = 3e-3")
-    initial_void_ratio: float = _key("e_0, void ratio at t = 0 (bulk density rho_s/(1 + e_0))", unit="-", bounds="(0, 5]")
-    constants: Optional[Tuple[float, ...]] = _key("c1, c2, c3, c4 of the Wu-Bauer-Kolymbas rate law", None, "-", bounds="[-1e5, 1e5]")
+    grain_diameter: float = _key("d, grain diameter of the Bagnold stress", unit="m", bounds="(0, 0.05]",
+                                 hint="metres: 3 mm = 3e-3")
+    initial_void_ratio: float = _key("e_0, void ratio at t = 0 (bulk density rho_s/(1 + e_0))", unit="-",
+                                     bounds="(0, 5]")
+    constants: Optional[Tuple[float, ...]] = _key("c1, c2, c3, c4 of the Wu-Bauer-Kolymbas rate law", None, "-",
+                        bounds="[-1e5, 1e5]")
     min_void_ratio: Optional[float] = _key("e_min of D_c = (e - e_min)/(e_crt - e_min)", None, "-", bounds="(0, 5]")
     critical_void_ratio: Optional[Tuple[float, ...]] = _key(
         "p1, p2, p3 of e_crt = p1 + p2 exp(p3 |tr T_s|), |tr T_s| in kPa, p3 in 1/kPa", None, bounds="[-100, 100]")
@@ -288,7 +300,8 @@ class ParticleBlock:
     lower: Tuple[float, ...] = _key("lower corner of the box", unit="m", bounds="[-1e5, 1e5]")
     upper: Tuple[float, ...] = _key("upper corner of the box", unit="m", bounds="[-1e5, 1e5]")
     name: str = _key("label used in messages", "block")
-    velocity: Optional[Tuple[float, ...]] = _key("initial velocity (default at rest)", None, "m/s", bounds="[-1000, 1000]", hint="m/s")
+    velocity: Optional[Tuple[float, ...]] = _key("initial velocity (default at rest)", None, "m/s",
+                       bounds="[-1000, 1000]", hint="m/s")
     initial_stress: Literal["hydrostatic", "zero"] = _key(
         "hydrostatic: pressure of the overburden of this block; zero: unstressed", "hydrostatic")
     shape: Literal["box", "cylinder"] = _key(
@@ -365,8 +378,10 @@ class Wall:
         "boundary model: ghost (mu(I), [M34]-[M36]), dynamic (boundary particles that obey continuity and "
         "the equation of state, Dalrymple & Knio 2001, as in [A]) or extrapolated (boundary particles whose "
         "velocity and stress are extrapolated from the material, as in [P])", "ghost")
-    lower: Optional[Tuple[float, ...]] = _key("lower corner of the box that clips the wall (default domain)", None, "m", bounds="[-1e5, 1e5]")
-    upper: Optional[Tuple[float, ...]] = _key("upper corner of the box that clips the wall (default domain)", None, "m", bounds="[-1e5, 1e5]")
+    lower: Optional[Tuple[float, ...]] = _key("lower corner of the box that clips the wall (default domain)", None,
+                    "m", bounds="[-1e5, 1e5]")
+    upper: Optional[Tuple[float, ...]] = _key("upper corner of the box that clips the wall (default domain)", None,
+                    "m", bounds="[-1e5, 1e5]")
     max_velocity_factor: float = _key(
         "beta_max of [M36]; 6 lets the three ghost rows extrapolate a linear profile exactly for the "
         "first material row (Morris et al. 1997 used 1.5; 1 means zero ghost velocity)", 6.0, "-", bounds="[1, 100]", hint="beta_max of [M36]")
@@ -407,7 +422,8 @@ class _Obstacle:
     below are in that frame."""
 
     name: str = _key("label used in messages", "obstacle")
-    origin: Optional[Tuple[float, ...]] = _key("the local frame's origin (default the global origin)", None, "m", bounds="[-1e5, 1e5]")
+    origin: Optional[Tuple[float, ...]] = _key("the local frame's origin (default the global origin)", None, "m",
+                     bounds="[-1e5, 1e5]")
     tilt_deg: float = _key("slope of the local x axis below the horizontal (about y; +: x' descends)", 0.0,
                            "deg", bounds="(-90, 90)", hint="degrees, not radians")
     friction_angle_deg: Optional[float] = _key(
@@ -427,7 +443,8 @@ class _Obstacle:
 @dataclass(frozen=True, kw_only=True)
 class ChuteSegment:
     length: float = _key("length along the slope", unit="m", bounds="(0, 1e4]")
-    slope_deg: float = _key("inclination below the horizontal (+: descends along +x)", unit="deg", bounds="(-90, 90)", hint="degrees, not radians")
+    slope_deg: float = _key("inclination below the horizontal (+: descends along +x)", unit="deg", bounds="(-90, 90)",
+                            hint="degrees, not radians")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -542,7 +559,8 @@ class DrumObstacle(_Obstacle):
 
     shape: Literal["drum"] = _key("obstacle kind", "drum")
     radius: float = _key("inner radius R of the drum", unit="m", bounds="(0, 1e3]")
-    angular_velocity: float = _key("omega, rotation rate, counter-clockwise positive (rad/s, not rpm)", unit="rad/s", bounds="[-100, 100]", hint="rad/s, not rpm: 1 rpm = 0.1047 rad/s")
+    angular_velocity: float = _key("omega, rotation rate, counter-clockwise positive (rad/s, not rpm)", unit="rad/s",
+                                   bounds="[-100, 100]", hint="rad/s, not rpm: 1 rpm = 0.1047 rad/s")
     dimensions = (2,)
 
     def check(self, path: str, dim: int) -> None:
@@ -610,7 +628,8 @@ class ParticleShifting:
 
 @dataclass(frozen=True, kw_only=True)
 class Numerics:
-    particle_spacing: float = _key("dp, initial lattice spacing of particles", unit="m", bounds="[1e-5, 10]", hint="metres")
+    particle_spacing: float = _key("dp, initial lattice spacing of particles", unit="m", bounds="[1e-5, 10]",
+                                   hint="metres")
     smoothing_length_ratio: float = _key("h/dp", 1.3, "-", bounds="[1, 3]")
     smoothing_function: Literal["wendland_c2", "wendland_c6", "cubic_spline"] = _key(
         "SPH smoothing function (MODEL.md section 0)", "wendland_c2")
@@ -653,6 +672,9 @@ class Run:
     output_dir: Optional[str] = _key("where outputs go (default output/<scene name>)", None)
     write_vtu: bool = _key("write a VTU particle file per frame (a .pvd series)", True)
     max_steps: Optional[int] = _key("stop after this many steps (default: no limit)", None, bounds="[1, 1e12]")
+    mach_warning: float = _key(
+        "warn once when the max Mach number |v|/c of a frame exceeds this, with the compressibility that "
+        "keeps the flow below it (weakly compressible SPH wants Mach < ~0.3; mach.py)", 0.3, "-", bounds="(0, 10]")
     stop_at_rest: Optional[float] = _key(
         "stop once the kinetic energy, checked at each output, has fallen below this fraction of its peak "
         "(e.g. 1e-3 for a collapse at rest; default: run to end_time)", None, "-", bounds="(0, 1)")
@@ -709,9 +731,12 @@ class Render:
                                  "px", bounds="[32, 8192]")
     colour_by: str = _key("particle field to colour by: speed, pressure, inertial_number, any output field "
                           "(vectors by magnitude)", "speed")
-    range: Optional[Tuple[float, float]] = _key("fixed colour range [min, max] (default: each frame's own)", None, bounds="[-1e15, 1e15]")
-    view_lower: Optional[Tuple[float, ...]] = _key("2D: lower corner of the view (default domain)", None, "m", bounds="[-1e5, 1e5]")
-    view_upper: Optional[Tuple[float, ...]] = _key("2D: upper corner of the view (default domain)", None, "m", bounds="[-1e5, 1e5]")
+    range: Optional[Tuple[float, float]] = _key("fixed colour range [min, max] (default: each frame's own)", None,
+                    bounds="[-1e15, 1e15]")
+    view_lower: Optional[Tuple[float, ...]] = _key("2D: lower corner of the view (default domain)", None, "m",
+                         bounds="[-1e5, 1e5]")
+    view_upper: Optional[Tuple[float, ...]] = _key("2D: upper corner of the view (default domain)", None, "m",
+                         bounds="[-1e5, 1e5]")
     camera: Optional[Camera] = _key("3D: camera (default: from the front-left, above the domain)", None)
 
     def view_box(self, domain: Domain) -> Tuple[Tuple[float, ...], Tuple[float, ...]]:
@@ -811,7 +836,8 @@ class Scene:
             raise ConfigError("numerics.stress_increment", "bounds the step by the hypoplastic stress rate: only "
                                                            "material.model: hypoplastic has one")
         if self.material.model != "hypoplastic" and self.numerics.bulk_viscosity > 0.0:
-            raise ConfigError("numerics.bulk_viscosity", "only the hypoplastic model has no equation of state to resist "
+            raise ConfigError("numerics.bulk_viscosity",
+                              "only the hypoplastic model has no equation of state to resist "
                                                          "compaction; set it to 0")
         if self.material.model == "mu_i" and self.numerics.stress_diffusion > 0.0:
             raise ConfigError("numerics.stress_diffusion", "mu(I) integrates no stress (its stress is algebraic); "

@@ -22,11 +22,12 @@ DENSITY_BAND = (0.1, 2.0)
 
 @ti.data_oriented
 class Diagnostics:
-    """Kinetic energy [J (per m in 2D)], max speed [m/s], max |density error| [-], and with open
-    faces the number of particles that have left the domain."""
+    """Kinetic energy [J (per m in 2D)], max speed [m/s], max |density error| [-], Mach number
+    max |v| / c_0 [-] (c_0 the model's reference sound speed, mach.py), and with open faces the number of particles that have left the domain."""
 
     def __init__(self, state, model):
         self.state, self.model = state, model
+        self.sound_speed = model.reference_sound_speed()  # [m/s], the c of the Mach number (mach.py)
         self.outflow = state.has("outflow")
         self.outflow_count = ti.field(ti.i32, shape=())
         self.kinetic_energy = ti.field(float, shape=())
@@ -53,7 +54,7 @@ class Diagnostics:
     def measure(self) -> dict:
         self._measure()
         result = {"kinetic_energy": float(self.kinetic_energy[None]), "max_speed": float(self.max_speed[None]),
-                  "max_density_error": float(self.max_density_error[None])}
+                  "max_density_error": float(self.max_density_error[None]), "mach": float(self.max_speed[None]) / self.sound_speed}
         if self.outflow:
             result["outflow"] = int(self.outflow_count[None])
         return result

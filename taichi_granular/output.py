@@ -24,7 +24,7 @@ import numpy as np
 
 from .config import Scene, dump_scene
 
-DIAGNOSTIC_COLUMNS = ("t", "step", "dt", "kinetic_energy", "max_speed", "max_density_error")
+DIAGNOSTIC_COLUMNS = ("t", "step", "dt", "kinetic_energy", "max_speed", "max_density_error", "mach")
 OPTIONAL_DIAGNOSTIC_COLUMNS = ("outflow",)  # particles that left by an open face (domain.outflow)
 INTEGER_DIAGNOSTIC_COLUMNS = ("step", "outflow")
 
@@ -120,8 +120,8 @@ class RunOutput:
             self.frames = [(t, p.name) for t, p in read_series(self.dir) if t <= time * (1 + 1e-12)]
         if (self.dir / "diagnostics.csv").exists():
             with open(self.dir / "diagnostics.csv") as fh:
-                rows = [{k: (int(v) if k in INTEGER_DIAGNOSTIC_COLUMNS else float(v)) for k, v in r.items()}
-                        for r in csv.DictReader(fh)]
+                rows = [{k: (int(v) if k in INTEGER_DIAGNOSTIC_COLUMNS else float(v)) for k, v in r.items() if v}
+                        for r in csv.DictReader(fh)]  # a run of an older version lacks the later columns
             self.diagnostics = [r for r in rows if r["t"] <= time * (1 + 1e-12)]
 
     def write_checkpoint(self, arrays: Dict[str, np.ndarray], counters: Dict[str, float]) -> None:

@@ -122,6 +122,7 @@ class Simulation:
         self.frame_index = 0
         self.last_diagnostics: dict = {}
         self.peak_kinetic_energy = 0.0
+        self.mach_warned = False
 
     # ---- pieces -------------------------------------------------------------------------------
 
@@ -161,6 +162,7 @@ class Simulation:
         diag = self.diagnostics.measure()
         self.peak_kinetic_energy = max(self.peak_kinetic_energy, diag["kinetic_energy"])
         self.last_diagnostics = {"t": self.t, "step": self.step_count, "dt": self.dt, **diag}
+        self._warn_mach(diag)
         if self.output is not None:
             arrays = self.scheme.snapshot()
             self.output.write_frame(self.frame_index, self.t, arrays, self.state.n_material)
@@ -174,6 +176,19 @@ class Simulation:
                 image = self.renderer.image(arrays, self.state.n_material, self.t)
                 write_png(self.output.dir / "frames" / png_name(self.frame_index), image)
         self.frame_index += 1
+
+    def _warn_mach(self, diag: dict) -> None:
+        """Once per run: a frame faster than run.mach_warning, with the remedy (mach.py)."""
+        threshold = self.scene.run.mach_warning
+        if self.mach_warned or not diag["mach"] > threshold:
+            return
+        from .mach import advice
+
+        self.mach_warned = True
+        sys.stderr.write(f"\nwarning: t = {self.t:.4g} s: Mach number {diag['mach']:.2f} (max speed "
+                         f"{diag['max_speed']:.3g} m/s, max density error {diag['max_density_error']:.1%}) is above "
+                         f"run.mach_warning = {threshold:g}: a weakly compressible flow this fast compresses "
+                         f"spuriously; {advice(self.scene, self.scheme.model, diag['mach'], diag['max_speed'])}\n")
 
     def counters(self) -> dict:
         return {"t": self.t, "step": self.step_count, "dt": self.dt, "frame": self.frame_index,

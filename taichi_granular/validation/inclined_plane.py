@@ -218,9 +218,16 @@ def flow_depth(frame: Dict[str, np.ndarray], n_material: int, length: float, spa
                bed: float = 0.0) -> float:
     """Height above the bed of the free surface, where the colour function falls to 1/2  [m]."""
     top = float(frame["position"][:n_material, 1].max())
-    heights = np.linspace(top - 2.0 * spacing, top + 2.0 * spacing, 401)
-    colour = colour_function_profile(frame, n_material, length, spacing, heights)
-    k = int(np.nonzero(colour >= 0.5)[0].max())  # C(top - 2 dp) ~ 1: k exists
+    while True:  # windows of 4 dp from the highest particle down: grains splashed above the layer are skipped
+        heights = np.linspace(top - 2.0 * spacing, top + 2.0 * spacing, 401)
+        colour = colour_function_profile(frame, n_material, length, spacing, heights)
+        if np.any(colour >= 0.5) or top < bed:
+            break
+        top -= 4.0 * spacing
+    if not np.any(colour >= 0.5):
+        raise ValueError("the layer has no free surface: its colour function stays below 1/2 at every height "
+                         "(the layer has come apart)")
+    k = int(np.nonzero(colour >= 0.5)[0].max())
     if k + 1 < len(heights):  # linear interpolation to C = 1/2
         k_frac = (colour[k] - 0.5) / (colour[k] - colour[k + 1])
         return float(heights[k] + k_frac * (heights[k + 1] - heights[k]) - bed)

@@ -178,6 +178,10 @@ class MuIRheology:
     def reference_sound_speed(self) -> float:
         return 1.0 / math.sqrt(self.K_t * self.phi_max * self.rho_s0)
 
+    def faster_sound(self, factor: float) -> list:
+        """The key and value that make c ``factor`` times faster: c ~ K_t^(-1/2) [M41] (mach.py)."""
+        return [("material.grain_compressibility", self.K_t / factor**2)]
+
     def derived_output(self, arrays: dict) -> dict:
         """Solid fraction phi = rho/rho_s, inertial number I from [M8], grain diameter [M43]."""
         rho_s = arrays["grain_density"]
