@@ -190,7 +190,8 @@ class ElastoplasticMaterial:
     poisson_ratio: float = _key("nu, Poisson's ratio [A6]", unit="-", bounds="[0, 0.5)")
     friction_angle_deg: float = _key("phi, internal friction angle of the Mohr-Coulomb strength", unit="deg",
                                      bounds="[0, 90)", hint="degrees, not radians")
-    cohesion: float = _key("c of S_f = c + p tan(phi) (0 for dry sand)", 0.0, "Pa", bounds="[0, 1e8]")
+    cohesion: float = _key("c of S_f = c + p tan(phi) (0 for dry sand; of the order of E keeps the material "
+                           "elastic)", 0.0, "Pa", bounds="[0, 1e12]")
     bulk_modulus: Optional[float] = _key(
         "K of p = K (rho/rho_0 - 1) [A5]; default 50 rho_0 g H_max, H_max the tallest block", None, "Pa", bounds="(0, 1e12]")
 
