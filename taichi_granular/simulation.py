@@ -273,7 +273,7 @@ class Simulation:
                 self.write_frame(final=True)
         if interrupt.caught:
             where = f" (state at t = {self.t:.6g} s written to {self.output.dir})" if self.output else ""
-            raise KeyboardInterrupt(f"interrupted at step {self.step_count}{where}")
+            raise KeyboardInterrupt(f"at step {self.step_count}{where}")
         wall = time.perf_counter() - wall_start
         steps = self.step_count - start_steps
         n = self.state.n_material
