@@ -27,6 +27,8 @@ def cmd_run(args) -> int:
     if args.profile:
         from .profiling import compiled_kernels
         print(sim.profiler.table())
+        if sim.scheme.viscous_solve is not None:
+            print(sim.scheme.viscous_solve.summary())
         kernels = compiled_kernels()
         print(f"compiled kernels ({len(kernels)}): " + ", ".join(k.removeprefix("taichi_granular.") for k in kernels))
     return 0
@@ -111,6 +113,9 @@ def cmd_bench(args) -> int:
     if args.study == "accuracy":
         from .bench.accuracy import main as accuracy
         return accuracy(args)
+    if args.study == "viscosity":
+        from .bench.viscosity import main as viscosity
+        return viscosity(args)
     raise AssertionError(args.study)
 
 
@@ -182,14 +187,16 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=cmd_validate)
 
     p = sub.add_parser("bench", parents=[common], help="benchmarks (timing lives here, never in tests)")
-    p.add_argument("study", choices=["throughput", "accuracy"],
+    p.add_argument("study", choices=["throughput", "accuracy", "viscosity"],
                    help="throughput: particle-steps/s by size; accuracy: error against cost over resolution "
-                        "and numerics (bench/accuracy.py)")
+                        "and numerics (bench/accuracy.py); viscosity: explicit against implicit viscosity on the "
+                        "Table 3 collapses (bench/viscosity.py)")
     p.add_argument("--sizes", type=int, nargs="+", default=[10_000, 40_000, 160_000],
                    help="throughput: approximate particle counts")
     p.add_argument("--steps", type=int, default=50, help="throughput: timed steps per size")
     p.add_argument("--quick", action="store_true", help="accuracy: the few-minute sweep (never rewrites the README)")
-    p.add_argument("--cases", nargs="+", help="accuracy: only cases whose name contains one of these")
+    p.add_argument("--cases", nargs="+", help="accuracy, viscosity: only cases whose name contains one of these")
+    p.add_argument("--window", type=float, default=0.01, help="viscosity: simulated seconds timed from release")
     p.add_argument("--out",
                    help="accuracy: output folder (default renders/accuracy, quick: output/bench/accuracy_quick)")
     p.add_argument("--timeout", type=float, default=3600.0, help="accuracy: seconds allowed per run")

@@ -640,6 +640,16 @@ class Numerics:
     momentum: Literal["stress_divergence", "viscous_pair"] = _key(
         "stress_divergence: sum m (sigma_i/rho_i^2 + sigma_j/rho_j^2) grad W; viscous_pair: [M27]",
         "stress_divergence")
+    viscosity: Literal["explicit", "implicit"] = _key(
+        "mu(I) viscous term: explicit (the step obeys the viscous limit of [M39]) or implicit (backward Euler, "
+        "solved by BiCGSTAB each step: only the acoustic limit sets the step; physics/implicit_viscosity.py)",
+        "explicit")
+    viscous_tolerance: float = _key(
+        "implicit viscosity: the solve stops when |residual| <= this x |v*| (the velocities before the viscous "
+        "update; against 1e-6, 1e-4 moves the velocities of a collapse by 5e-4 of their largest, measured)",
+        1e-4, "-", bounds="[1e-14, 0.1]")
+    viscous_max_iterations: int = _key("implicit viscosity: the most BiCGSTAB iterations of one solve; a solve "
+                                       "that needs more stops the run", 200, bounds="[1, 1e5]")
     gradient_correction: Literal["scalar", "matrix", "none"] = _key(
         "kernel gradient renormalisation: full matrix M^-1 (exact for linear fields, also at walls and "
         "free surfaces), scalar d/tr(M), or none", "matrix")
@@ -840,6 +850,13 @@ class Scene:
             raise ConfigError("numerics.bulk_viscosity",
                               "only the hypoplastic model has no equation of state to resist "
                                                          "compaction; set it to 0")
+        if self.numerics.viscosity == "implicit":
+            if self.material.model != "mu_i":
+                raise ConfigError("numerics.viscosity", "the implicit viscous update is for the mu(I) model's "
+                                                        "regularised viscosity; set it to explicit")
+            if self.numerics.integrator != "symplectic_verlet":
+                raise ConfigError("numerics.viscosity", "the implicit viscous update runs in the symplectic Verlet "
+                                                        "kick; set numerics.integrator: symplectic_verlet")
         if self.material.model == "mu_i" and self.numerics.stress_diffusion > 0.0:
             raise ConfigError("numerics.stress_diffusion", "mu(I) integrates no stress (its stress is algebraic); "
                                                            "set it to 0")

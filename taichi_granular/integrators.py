@@ -51,6 +51,12 @@ class _Update(Stage):
             self.block_mass = ti.field(float, n_blocks)
             self.mean_correction = ti.Vector.field(ctx.state.dim, float, ())
 
+    def full_step(self, dt: float, scheme) -> None:
+        """The kick, the implicit viscous solve where the scene has one, the drift."""
+        scheme.profiler(self, self.kick, dt)
+        scheme.solve_viscosity()
+        scheme.profiler(self, self.drift, dt)
+
     @ti.func
     def wrap(self, i):
         self.state.position[i] = self.grid.wrap(self.state.position[i])
@@ -88,20 +94,26 @@ class _Update(Stage):
         return self.state.velocity_gradient[i] @ self.particle_shift(i, dt)
 
     @ti.kernel
-    def full_step(self, dt: float):
-        """v(n+1) = v(n) + dt a; x(n+1) = x(n) + dt (v(n) + v(n+1))/2; rho(n+1) = rho(n) + dt d rho/dt
+    def kick(self, dt: float):
+        """v(n+1) = v(n) + dt a (with the implicit viscous update, v* of its solve, which follows)."""
+        ti.loop_config(serialize=runtime.serial_loops)
+        for i in range(self.state.n_material):
+            self.state.velocity[i] = self.state.velocity_start[i] + dt * self.state.acceleration[i]
+
+    @ti.kernel
+    def drift(self, dt: float):
+        """x(n+1) = x(n) + dt (v(n) + v(n+1))/2; rho(n+1) = rho(n) + dt d rho/dt
         (history fields alike); then the particle shift, if enabled: x += delta r and, where the
         model has a velocity gradient, v += grad v . delta r less its mass-weighted mean, so that
         the shift moves no momentum (the correction alone would: measured ~1e-3 of the momentum
         over 1e4 steps of a periodic box)."""
         ti.loop_config(serialize=runtime.serial_loops)
         for i in range(self.state.n_material):
-            v_new = self.state.velocity_start[i] + dt * self.state.acceleration[i]
+            v_new = self.state.velocity[i]
             x_new = self.state.position_start[i] + 0.5 * dt * (self.state.velocity_start[i] + v_new)
             if ti.static(self.shifting):  # physics/shifting.py: move by dt u_shift, carry v along
                 x_new += self.particle_shift(i, dt)
             self.state.position[i] = x_new
-            self.state.velocity[i] = v_new
             self.wrap(i)
             for field, rate, start in ti.static(self.history):
                 field[i] = start[i] + dt * rate[i]
@@ -150,7 +162,7 @@ class SymplecticVerlet(_Update):
         scheme.profiler(self, self.half_step, dt)
         scheme.after_move(0.5)
         scheme.evaluate_rates()
-        scheme.profiler(self, self.full_step, dt)
+        self.full_step(dt, scheme)
         scheme.after_move()
 
 
@@ -175,7 +187,7 @@ class PredictorCorrector(_Update):
         scheme.profiler(self, self.half_step, dt)
         scheme.after_move(0.5)
         scheme.evaluate_rates()
-        scheme.profiler(self, self.full_step, dt)
+        self.full_step(dt, scheme)
         scheme.after_move()
 
 

@@ -25,7 +25,9 @@ import numpy as np
 from .config import Scene, dump_scene
 
 DIAGNOSTIC_COLUMNS = ("t", "step", "dt", "kinetic_energy", "max_speed", "max_density_error", "mach")
-OPTIONAL_DIAGNOSTIC_COLUMNS = ("outflow",)  # particles that left by an open face (domain.outflow)
+# particles that left by an open face (domain.outflow); mean iterations per step of the implicit
+# viscous solve since the previous row (numerics.viscosity: implicit)
+OPTIONAL_DIAGNOSTIC_COLUMNS = ("outflow", "viscous_iterations")
 INTEGER_DIAGNOSTIC_COLUMNS = ("step", "outflow")
 
 

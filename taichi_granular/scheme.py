@@ -16,6 +16,7 @@ from .integrators import INTEGRATORS, StableTimeStep
 from .physics.artificial_stress import ArtificialStress
 from .physics.artificial_viscosity import ArtificialViscosity
 from .physics.gradient_correction import GRADIENTS
+from .physics.implicit_viscosity import ImplicitViscosity
 from .physics.outflow import Outflow
 from .physics.rheology import MODELS
 from .physics.shifting import FreeSurface, ParticleShifting
@@ -70,12 +71,14 @@ class Scheme:
         self.initial = initial if initial is not None else build_initial(scene, model)
         walls_cls = boundary_class(scene)
         rate_classes = rate_stage_classes(scene, model)
+        self.implicit_viscosity = scene.numerics.viscosity == "implicit"
         integrator_cls = INTEGRATORS[scene.numerics.integrator]
         gradient_cls = GRADIENTS[scene.numerics.gradient_correction]
         specs = merge_specs([model.fields, walls_cls.fields, integrator_cls.fields, gradient_cls.fields]
                             + [cls.fields for cls in rate_classes + model.update_stage_classes()
                                + walls_cls.position_stage_classes(scene)]
-                            + ([Outflow.fields] if scene.domain.outflow else []))
+                            + ([Outflow.fields] if scene.domain.outflow else [])
+                            + ([ImplicitViscosity.fields] if self.implicit_viscosity else []))
         ini = self.initial
         runtime.choose_loops(ini.n_total)
         self.state = ParticleState(scene.dimension, ini.n_material, ini.n_wall, specs)
@@ -99,6 +102,10 @@ class Scheme:
         ctx.gradient = self.gradient = gradient_cls(ctx)
         self.rate_stages = [cls(ctx) for cls in rate_classes]
         self.integrator = integrator_cls(ctx)
+        self.viscous_solve = None  # physics/implicit_viscosity.py, between the kick and the drift
+        if self.implicit_viscosity:
+            momentum = next(stage for stage in self.rate_stages if hasattr(stage, "apply_viscous"))
+            self.viscous_solve = ImplicitViscosity(ctx, momentum)
         # after every update: walls act on the new positions, the model on the new state
         outflow = [Outflow] if scene.domain.outflow else []
         self.position_stages = [cls(ctx) for cls in outflow + walls_cls.position_stage_classes(scene)
@@ -110,6 +117,15 @@ class Scheme:
     def evaluate_rates(self) -> None:
         for stage in self.rate_stages:
             self.profiler(stage)
+
+    def solve_viscosity(self) -> None:
+        """The implicit viscous update of the velocities after the kick, where the scene asks for it."""
+        if self.viscous_solve is not None:
+            self.profiler(self.viscous_solve)
+
+    def solver_statistics(self) -> dict:
+        """Columns for diagnostics.csv from the solves since the last call (none without one)."""
+        return self.viscous_solve.take_statistics() if self.viscous_solve is not None else {}
 
     def prepare(self) -> None:
         """Anything the integrator needs before its first step (initial rates)."""
@@ -146,12 +162,13 @@ class Scheme:
         rates = [s.describe() for s in self.rate_stages]
         moves = [s.describe() for s in self.position_stages]
         integ = self.integrator
+        final = [f"{integ.name}: kick [integration]"] + \
+            ([self.viscous_solve.describe()] if self.viscous_solve is not None else []) + \
+            [f"{integ.name}: drift [integration]"]
         if integ.rate_evaluations == 1:
-            steps = [f"{integ.name}: half step [integration]"] + moves + rates + \
-                    [f"{integ.name}: full step [integration]"] + moves
+            steps = [f"{integ.name}: half step [integration]"] + moves + rates + final + moves
         else:
-            steps = rates + [f"{integ.name}: predictor [integration]"] + moves + rates + \
-                    [f"{integ.name}: corrector [integration]"] + moves
+            steps = rates + [f"{integ.name}: predictor [integration]"] + moves + rates + final + moves
         return steps + [self.time_step.describe()]
 
     def memory_bytes(self) -> int:

@@ -15,6 +15,7 @@ from . import runtime
 from .config import Scene
 from .diagnostics import Diagnostics, Guard
 from .output import RunOutput
+from .physics.implicit_viscosity import ViscousSolveError
 from .profiling import StageProfiler
 
 
@@ -161,7 +162,8 @@ class Simulation:
         ``run.checkpoint_every`` frames and always at the ``final`` frame of a run."""
         diag = self.diagnostics.measure()
         self.peak_kinetic_energy = max(self.peak_kinetic_energy, diag["kinetic_energy"])
-        self.last_diagnostics = {"t": self.t, "step": self.step_count, "dt": self.dt, **diag}
+        self.last_diagnostics = {"t": self.t, "step": self.step_count, "dt": self.dt, **diag,
+                                 **self.scheme.solver_statistics()}
         self._warn_mach(diag)
         if self.output is not None:
             arrays = self.scheme.snapshot()
@@ -233,7 +235,11 @@ class Simulation:
                     f"step {self.step_count}, t = {self.t:.6g} s: stable time step {self.dt:.3g} s fell below "
                     f"numerics.min_time_step = {min_dt:.3g} s"))
             dt = min(self.dt, next_output - self.t, end_time - self.t)
-            self.scheme.step(dt, self.t)
+            try:
+                self.scheme.step(dt, self.t)
+            except ViscousSolveError as error:
+                raise SimulationError(self._write_failure(
+                    f"step {self.step_count + 1}, t = {self.t:.6g} s, dt = {dt:.3g} s: {error}")) from None
             self.step_count += 1
             self.t += dt
             self._check(f"after step {self.step_count}")

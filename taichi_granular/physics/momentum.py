@@ -24,12 +24,22 @@ Morris/Cleary pairwise viscous term and gravity,
 
 Both sums are antisymmetric in (i, j): momentum is conserved to round-off between material
 particles.
+
+With ``numerics.viscosity: implicit`` (mu(I)) the rate stage leaves out every term that is
+linear in the velocity through the viscosity (the deviatoric stress and the residual damping,
+or the [M27] pair term) and offers that same sum as a linear operator instead:
+``apply_viscous()`` writes L(operand) to ``image``, with the viscosity, densities, positions
+and kernel corrections of the rate evaluation frozen. physics/implicit_viscosity.py solves
+(I - dt L) v = v* with it. Ghost walls enter L as they enter the explicit term (their velocity
+is beta v_i, their deviatoric stress i's); the gravity part of an extrapolated ghost stress
+does not depend on v and stays in the rate.
 """
 import taichi as ti
 
 from .. import runtime
 
 from .stage import Stage
+from .strain_rate import velocity_gradient_term
 
 
 @ti.data_oriented
@@ -42,6 +52,12 @@ class _Momentum(Stage):
         self.gravity = ti.Vector.field(self.dim, float, shape=())
         self.gravity[None] = ctx.scene.gravity_vector
         self.eps2 = 0.01 * ctx.smoothing.h**2  # keeps r^2 away from zero [M27]
+        self.implicit = ctx.scene.numerics.viscosity == "implicit"
+        if self.implicit:
+            # the operand spans every particle so that any wall's velocity lookup stays in range
+            self.operand = ti.Vector.field(self.dim, float, ctx.state.n_total)  # velocity-like [m/s]
+            self.image = ti.Vector.field(self.dim, float, ctx.state.n_material)  # L(operand) [m/s^2]
+            self.diagonal = ti.Matrix.field(self.dim, self.dim, float, ctx.state.n_material)  # d L_i/d v_i [1/s]
 
     @ti.func
     def viscous_coefficient(self, i, j, k, v_ij, x_ij, r):
@@ -63,6 +79,29 @@ class _Momentum(Stage):
             self.grid.for_each_neighbor(i, self.pair, acc)
             self.state.acceleration[i] = acc
 
+    # ---- the viscous operator of the implicit update ------------------------------------------
+
+    @ti.func
+    def diagonal_pair(self, i, j, x_ij, r, block: ti.template()):
+        """d/dv_i of the [M27] pair term: the block-Jacobi preconditioner of the solve (of the
+        stress form too, whose own diagonal it approximates)  [1/s]."""
+        k = self.walls.state_index(i, j)
+        unit = x_ij / (r * r)  # v_ij . x_ij = 1: the coefficient alone
+        block += self.walls.self_factor(i, j, x_ij) * self.viscous_coefficient(i, j, k, unit, x_ij, r) * \
+            self.gradient.pairwise(i, j, x_ij, r).outer_product(x_ij)
+
+    @ti.kernel
+    def compute_diagonal(self):
+        ti.loop_config(serialize=runtime.serial_loops)
+        for i in range(self.state.n_material):
+            block = ti.Matrix.zero(float, self.dim, self.dim)
+            self.grid.for_each_neighbor(i, self.diagonal_pair, block)
+            self.diagonal[i] = block
+
+    def apply_viscous(self) -> None:
+        """image = L(operand): the viscous acceleration the explicit term would give the operand."""
+        self._apply()
+
 
 @ti.data_oriented
 class ViscousMomentum(_Momentum):
@@ -73,11 +112,25 @@ class ViscousMomentum(_Momentum):
     def pair(self, i, j, x_ij, r, acc: ti.template()):
         s = self.state
         k = self.walls.state_index(i, j)
-        v_ij = self.walls.relative_velocity(i, j, x_ij)
-        pressure_term = -s.mass[j] * (s.pressure[i] / s.density[i] ** 2
-                                      + self.walls.pressure(i, j, x_ij) / s.density[k] ** 2)
-        acc += (pressure_term + self.viscous_coefficient(i, j, k, v_ij, x_ij, r)) * \
-            self.gradient.pairwise(i, j, x_ij, r)
+        coefficient = -s.mass[j] * (s.pressure[i] / s.density[i] ** 2
+                                    + self.walls.pressure(i, j, x_ij) / s.density[k] ** 2)
+        if ti.static(not self.implicit):
+            coefficient += self.viscous_coefficient(i, j, k, self.walls.relative_velocity(i, j, x_ij), x_ij, r)
+        acc += coefficient * self.gradient.pairwise(i, j, x_ij, r)
+
+    @ti.func
+    def viscous_pair(self, i, j, x_ij, r, acc: ti.template()):
+        k = self.walls.state_index(i, j)
+        v_ij = self.walls.relative(self.operand, i, j, x_ij)
+        acc += self.viscous_coefficient(i, j, k, v_ij, x_ij, r) * self.gradient.pairwise(i, j, x_ij, r)
+
+    @ti.kernel
+    def _apply(self):
+        ti.loop_config(serialize=runtime.serial_loops)
+        for i in range(self.state.n_material):
+            acc = ti.Vector.zero(float, self.dim)
+            self.grid.for_each_neighbor(i, self.viscous_pair, acc)
+            self.image[i] = acc
 
 
 @ti.data_oriented
@@ -89,28 +142,76 @@ class StressMomentum(_Momentum):
         super().__init__(ctx)
         # the residual damping needs a viscosity (mu(I)); elastic models are damped by [A16]
         self.viscous_residual = ctx.state.has("viscosity")
+        if self.implicit:
+            self.operand_gradient = ti.Matrix.field(self.dim, self.dim, float, ctx.state.n_material)  # [1/s]
+
+    @ti.func
+    def residual_damping(self, i, j, x_ij, r, grad_w, velocity: ti.template(), gradient: ti.template()):
+        """The [M27] pair term of the velocity residual v_ij - (grad v_i + grad v_j)/2 . x_ij (zero for
+        quadratic fields). A boundary particle that is its own state (extrapolated walls) has no
+        gradient or viscosity of its own: it lends i's  [m/s^2]."""
+        k = self.walls.state_index(i, j)
+        m = k
+        if k >= self.state.n_material:
+            m = i
+        v_residual = self.walls.relative(velocity, i, j, x_ij) - 0.5 * (gradient[i] + gradient[m]) @ x_ij
+        return self.viscous_coefficient(i, j, m, v_residual, x_ij, r) * grad_w
 
     @ti.func
     def pair(self, i, j, x_ij, r, acc: ti.template()):
         s = self.state
         k = self.walls.state_index(i, j)
         identity = ti.Matrix.identity(float, self.dim)
-        sigma_i = self.model.deviatoric_stress(i) - s.pressure[i] * identity
-        sigma_j = self.walls.stress(i, j, x_ij, self.model.deviatoric_stress(self.walls.stress_index(i, j))
-                                    - s.pressure[k] * identity)
-        term = sigma_i / s.density[i] ** 2 + sigma_j / s.density[k] ** 2
         grad_w = self.gradient.pairwise(i, j, x_ij, r)
-        acc += s.mass[j] * (term @ grad_w)
-        if ti.static(self.viscous_residual):
-            # pairwise viscous damping of the velocity residual (zero for quadratic fields); a
-            # boundary particle that is its own state (extrapolated walls) has no gradient or
-            # viscosity of its own: it lends i's
-            m = k
-            if k >= s.n_material:
-                m = i
-            v_residual = self.walls.relative_velocity(i, j, x_ij) - \
-                0.5 * (s.velocity_gradient[i] + s.velocity_gradient[m]) @ x_ij
-            acc += self.viscous_coefficient(i, j, m, v_residual, x_ij, r) * grad_w
+        if ti.static(self.implicit):  # pressure only: the viscous stress is the solve's
+            term = -s.pressure[i] / s.density[i] ** 2 * identity + \
+                self.walls.stress(i, j, x_ij, -s.pressure[k] * identity) / s.density[k] ** 2
+            acc += s.mass[j] * (term @ grad_w)
+        else:
+            sigma_i = self.model.deviatoric_stress(i) - s.pressure[i] * identity
+            sigma_j = self.walls.stress(i, j, x_ij, self.model.deviatoric_stress(self.walls.stress_index(i, j))
+                                        - s.pressure[k] * identity)
+            term = sigma_i / s.density[i] ** 2 + sigma_j / s.density[k] ** 2
+            acc += s.mass[j] * (term @ grad_w)
+            if ti.static(self.viscous_residual):
+                acc += self.residual_damping(i, j, x_ij, r, grad_w, s.velocity, s.velocity_gradient)
+
+    @ti.func
+    def operand_gradient_pair(self, i, j, x_ij, r, gradient: ti.template()):
+        velocity_gradient_term(self, self.operand, i, j, x_ij, r, gradient)
+
+    @ti.func
+    def viscous_pair(self, i, j, x_ij, r, acc: ti.template()):
+        s = self.state
+        k = self.walls.state_index(i, j)
+        sigma_i = self.model.viscous_stress(s.viscosity[i], self.operand_gradient[i])
+        m = self.walls.stress_index(i, j)
+        sigma_j = self.model.viscous_stress(s.viscosity[m], self.operand_gradient[m])
+        grad_w = self.gradient.pairwise(i, j, x_ij, r)
+        acc += s.mass[j] * ((sigma_i / s.density[i] ** 2 + sigma_j / s.density[k] ** 2) @ grad_w)
+        acc += self.residual_damping(i, j, x_ij, r, grad_w, self.operand, self.operand_gradient)
+
+    @ti.kernel
+    def _operand_gradient(self):
+        ti.loop_config(serialize=runtime.serial_loops)
+        for i in range(self.state.n_material):
+            gradient = ti.Matrix.zero(float, self.dim, self.dim)
+            self.grid.for_each_neighbor(i, self.operand_gradient_pair, gradient)
+            self.operand_gradient[i] = gradient
+
+    @ti.kernel
+    def _apply_divergence(self):
+        ti.loop_config(serialize=runtime.serial_loops)
+        for i in range(self.state.n_material):
+            acc = ti.Vector.zero(float, self.dim)
+            self.grid.for_each_neighbor(i, self.viscous_pair, acc)
+            self.image[i] = acc
+
+    def _apply(self) -> None:
+        """Two passes: the operand's velocity gradient [M31], then the divergence of its viscous
+        stress and the residual damping."""
+        self._operand_gradient()
+        self._apply_divergence()
 
 
 MOMENTUM = {"viscous_pair": ViscousMomentum, "stress_divergence": StressMomentum}

@@ -25,6 +25,16 @@ def strain_rate_modulus(velocity_gradient):
     return ti.sqrt(2.0 * (eps * eps).sum())
 
 
+@ti.func
+def velocity_gradient_term(stage: ti.template(), velocity: ti.template(), i, j, x_ij, r, gradient: ti.template()):
+    """Pair j's share of grad v_i [M31] for any velocity-like field (the state's velocity, or the
+    implicit viscous solve's operand), through ``stage``'s walls and kernel gradient."""
+    k = stage.walls.state_index(i, j)
+    volume_j = stage.state.mass[j] / stage.state.density[k]
+    v_ij = stage.walls.relative(velocity, i, j, x_ij)
+    gradient -= volume_j * v_ij.outer_product(stage.gradient.one_sided(i, j, x_ij, r))
+
+
 @ti.data_oriented
 class StrainRate(Stage):
     name = "strain_rate"
@@ -41,10 +51,7 @@ class StrainRate(Stage):
 
     @ti.func
     def pair(self, i, j, x_ij, r, gradient: ti.template()):
-        k = self.walls.state_index(i, j)
-        volume_j = self.state.mass[j] / self.state.density[k]
-        v_ij = self.walls.relative_velocity(i, j, x_ij)
-        gradient -= volume_j * v_ij.outer_product(self.gradient.one_sided(i, j, x_ij, r))  # [M31]
+        velocity_gradient_term(self, self.state.velocity, i, j, x_ij, r, gradient)  # [M31]
 
     @ti.kernel
     def _run(self):

@@ -39,8 +39,10 @@ class MuIRheology:
         FieldSpec("grain_density", "scalar", "grain density rho_s, root of [M44]", "kg/m^3", "material"),
     )
 
-    def __init__(self, material, dim: int, smoothing_length: float, precision: str = "f64", state=None):
+    def __init__(self, material, dim: int, smoothing_length: float, precision: str = "f64", state=None,
+                 implicit_viscosity: bool = False):
         self.material = material
+        self.implicit_viscosity = implicit_viscosity  # the time step drops [M39]'s viscous limit
         self.dim = dim
         self.state = state
         self.h = float(smoothing_length)
@@ -61,7 +63,8 @@ class MuIRheology:
 
     @classmethod
     def from_scene(cls, scene):
-        return cls(scene.material, scene.dimension, scene.numerics.smoothing_length, scene.precision)
+        return cls(scene.material, scene.dimension, scene.numerics.smoothing_length, scene.precision,
+                   implicit_viscosity=scene.numerics.viscosity == "implicit")
 
     # integrated per-particle quantities besides x, v, rho: none (the stress is algebraic)
     history = ()
@@ -141,10 +144,14 @@ class MuIRheology:
         return eta
 
     @ti.func
+    def viscous_stress(self, viscosity, grad_v):
+        """s = 2 eta dev(eps) [M10-11] of a velocity gradient  [Pa]."""
+        return viscosity * deviator(grad_v + grad_v.transpose())
+
+    @ti.func
     def deviatoric_stress(self, k):
-        """s = 2 eta dev(eps) [M10-11], from the stored velocity gradient  [Pa]."""
-        grad_v = self.state.velocity_gradient[k]
-        return self.state.viscosity[k] * deviator(grad_v + grad_v.transpose())
+        """s of particle k, from its stored velocity gradient and viscosity  [Pa]."""
+        return self.viscous_stress(self.state.viscosity[k], self.state.velocity_gradient[k])
 
     # ---- wave speed and time step -----------------------------------------------------------
 
@@ -156,10 +163,20 @@ class MuIRheology:
 
     @ti.func
     def stable_time_step(self, i):
-        """min(h/c_i, 0.1 rho_i h^2/eta_i) of [M39] (the CFL factor is applied by the caller)  [s]."""
+        """min(h/c_i, 0.1 rho_i h^2/eta_i) of [M39] (the CFL factor is applied by the caller)  [s].
+        With the implicit viscous update the viscous limit goes; the acoustic one stays, with the
+        force limit 0.25 sqrt(h/|a_i|) of Monaghan (1992) on the explicit acceleration (0.5 here:
+        the CFL of 0.5 makes it 0.25) in its place, a bound [M39] never needed because the
+        viscous limit was far below it."""
         acoustic = self.h / self.sound_speed(i)
-        viscous = 0.1 * self.state.density[i] * self.h**2 / ti.max(self.state.viscosity[i], 1e-30)
-        return ti.min(acoustic, viscous)
+        limit = acoustic
+        if ti.static(self.implicit_viscosity):
+            acceleration = self.state.acceleration[i].norm()
+            if acceleration > 0.0:
+                limit = ti.min(acoustic, 0.5 * ti.sqrt(self.h / acceleration))
+        else:
+            limit = ti.min(acoustic, 0.1 * self.state.density[i] * self.h**2 / ti.max(self.state.viscosity[i], 1e-30))
+        return limit
 
     @ti.func
     def density_error(self, i):

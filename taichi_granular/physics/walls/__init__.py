@@ -2,7 +2,9 @@
 
 - ``state_index(i, j)``: the particle whose density, pressure, viscosity... j carries in the
   pair (j itself, or i for ghost particles that mirror the material they face);
-- ``relative_velocity(i, j, x_ij)``: the v_ij to use in every pair term [m/s];
+- ``relative_velocity(i, j, x_ij)``: the v_ij to use in every pair term [m/s], and
+  ``relative(velocity, i, j, x_ij)`` the same for any velocity-like field (ghost and no walls,
+  the ones the implicit viscous solve of mu(I) meets);
 - ``stress_index(i, j)``: the particle whose deviatoric stress j carries (the state index, or i
   for dynamic boundary particles: a rough wall), and ``stress(i, j, x_ij, sigma)`` the total
   stress j carries given that deviatoric stress and the pressure of the state index [Pa];

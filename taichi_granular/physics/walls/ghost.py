@@ -51,7 +51,17 @@ class NoWalls:
 
     @ti.func
     def relative_velocity(self, i, j, x_ij):
-        return self.state.velocity[i] - self.state.velocity[j]
+        return self.relative(self.state.velocity, i, j, x_ij)
+
+    @ti.func
+    def relative(self, velocity: ti.template(), i, j, x_ij):
+        """v_ij of any velocity-like field (the implicit viscous solve's search directions)."""
+        return velocity[i] - velocity[j]
+
+    @ti.func
+    def self_factor(self, i, j, x_ij):
+        """d v_ij / d v_i: 1 (a scalar times the identity)."""
+        return 1.0
 
     @ti.func
     def pressure(self, i, j, x_ij):
@@ -91,17 +101,29 @@ class GhostWalls(NoWalls):
         return k
 
     @ti.func
-    def relative_velocity(self, i, j, x_ij):
-        v_ij = self.state.velocity[i] - self.state.velocity[j]
+    def beta(self, i, j, x_ij):
+        """beta = min(beta_max, 1 + d_j/d_i) of ghost j seen from material i [M35]-[M36]."""
+        w = j - self.state.n_material
+        d_j = self.state.wall_distance[w]
+        d_i = x_ij.dot(self.state.wall_normal[w]) - d_j  # x_ij . n = d_i + d_j
+        beta = self.state.wall_beta_max[w]
+        if d_i > 0.0:
+            beta = ti.min(beta, 1.0 + d_j / d_i)
+        return beta
+
+    @ti.func
+    def relative(self, velocity: ti.template(), i, j, x_ij):
+        v_ij = velocity[i] - velocity[j]
         if j >= self.state.n_material:
-            w = j - self.state.n_material
-            d_j = self.state.wall_distance[w]
-            d_i = x_ij.dot(self.state.wall_normal[w]) - d_j  # x_ij . n = d_i + d_j
-            beta = self.state.wall_beta_max[w]
-            if d_i > 0.0:
-                beta = ti.min(beta, 1.0 + d_j / d_i)  # [M35]-[M36]
-            v_ij = beta * self.state.velocity[i]
+            v_ij = self.beta(i, j, x_ij) * velocity[i]
         return v_ij
+
+    @ti.func
+    def self_factor(self, i, j, x_ij):
+        factor = 1.0
+        if j >= self.state.n_material:
+            factor = self.beta(i, j, x_ij)
+        return factor
 
     @ti.func
     def extrapolation(self, i, j, x_ij):

@@ -1,0 +1,222 @@
+"""Implicit (backward Euler) viscous update of the mu(I) momentum equation
+(``numerics.viscosity: implicit``).
+
+Why: the regularised viscosity reaches eta_hat_max = eta_0 + tau_0 m_0 [M53] in every
+sub-yield grain, and the explicit viscous limit 0.1 rho h^2/eta of [M39] then sits 250-800
+times below the acoustic one (measured on the Table 3 collapses). The stiff term is linear in
+the velocity once eta is known, so it is taken at the new velocity:
+
+    v* = v(n) + dt a_explicit(n+1/2)              (pressure, gravity: the rate stage's kick)
+    v(n+1) = v* + dt L v(n+1),  i.e.  (I - dt L) v(n+1) = v*,
+
+L the viscous sum of the momentum stage (physics/momentum.py ``apply_viscous``: the stress
+divergence of 2 eta dev(eps) and the residual damping, or the [M27] pair term) with the
+viscosity, densities, positions and kernel corrections of the half-step rate evaluation: eta
+is lagged by half a step (one Picard iteration). The time step then keeps [M39]'s acoustic
+limit only (physics/rheology/mu_i.py).
+
+The solve is matrix-free over the neighbour lists: BiCGSTAB (van der Vorst 1992) with right
+block-Jacobi preconditioning by the d x d diagonal blocks of I - dt L_[M27] (exact for the pair
+form, an approximation for the stress form). Why BiCGSTAB and not the conjugate gradient of
+Weiler et al. (2018): the stress form's L, built from the corrected (non-symmetric) SPH
+gradient, is negative definite but not symmetric (tests/test_implicit_viscosity.py measures
+both), and CG needs symmetry. The start is v* plus the previous step's viscous change (in a
+steady flow the viscous force balances gravity from step to step). Dot products are summed
+in fixed blocks, so a run is bitwise reproducible on the CPU.
+
+The solve stops when |residual| <= ``numerics.viscous_tolerance`` |v*| (Euclidean over all
+components); one that has not got there after ``numerics.viscous_max_iterations`` raises
+ViscousSolveError with the residual and the iteration count, and the run stops (exit 3).
+"""
+import taichi as ti
+
+from .. import runtime
+from ..state import FieldSpec
+from .stage import Stage
+
+DOT_BLOCK = 256  # particles per partial sum of a dot product
+
+
+class ViscousSolveError(RuntimeError):
+    """The implicit viscous solve did not converge (the message gives residual and iterations)."""
+
+
+@ti.data_oriented
+class ImplicitViscosity(Stage):
+    name = "implicit_viscosity"
+    category = "forces"
+    equation = "(I - dt L) v = v*, BiCGSTAB"
+    fields = (FieldSpec("viscous_acceleration", "vector",
+                        "dv/dt of the implicit viscous update in the last step (its warm start)", "m/s^2",
+                        "material"),)
+
+    def __init__(self, ctx, momentum):
+        super().__init__(ctx)
+        self.momentum = momentum
+        self.time_step = ctx.time_step
+        numerics = ctx.scene.numerics
+        self.tolerance = numerics.viscous_tolerance
+        self.max_iterations = numerics.viscous_max_iterations
+        dim, n = ctx.state.dim, ctx.state.n_material
+        self.dim = dim
+        self.target, self.residual, self.shadow, self.direction, self.v, self.t = (
+            ti.Vector.field(dim, float, n) for _ in range(6))
+        self.preconditioner = ti.Matrix.field(dim, dim, float, n)
+        self.n_blocks = max(1, -(-n // DOT_BLOCK))
+        self.partial = ti.field(float, self.n_blocks)
+        self.total = ti.field(float, ())
+        self.iterations = 0  # summed over solves since the last ``take_statistics``
+        self.solves = 0
+        self.run_iterations = 0  # over the whole run (``run --profile``)
+        self.run_solves = 0
+
+    # ---- vector kernels ---------------------------------------------------------------------
+
+    @ti.kernel
+    def _dot(self, a: ti.template(), b: ti.template()) -> float:
+        n = self.state.n_material
+        ti.loop_config(serialize=runtime.serial_loops)
+        for blk in range(self.n_blocks):  # each block summed in order: the same bits every run
+            acc = 0.0
+            for i in range(blk * DOT_BLOCK, ti.min((blk + 1) * DOT_BLOCK, n)):
+                acc += a[i].dot(b[i])
+            self.partial[blk] = acc
+        ti.loop_config(serialize=True)
+        for _ in range(1):
+            acc = 0.0
+            for blk in range(self.n_blocks):
+                acc += self.partial[blk]
+            self.total[None] = acc
+        return self.total[None]
+
+    @ti.kernel
+    def _begin(self, dt: float):
+        """target = v*; x = v* + dt a_viscous(previous step); operand = x; preconditioner."""
+        ti.loop_config(serialize=runtime.serial_loops)
+        for i in range(self.state.n_material):
+            self.target[i] = self.state.velocity[i]
+            x = self.state.velocity[i] + dt * self.state.viscous_acceleration[i]
+            self.state.velocity[i] = x
+            self.momentum.operand[i] = x
+            self.preconditioner[i] = (ti.Matrix.identity(float, self.dim) - dt * self.momentum.diagonal[i]).inverse()
+
+    @ti.kernel
+    def _first_residual(self, dt: float):
+        """r = v* - (I - dt L) x; the shadow residual r^ = r; p = v = 0."""
+        ti.loop_config(serialize=runtime.serial_loops)
+        for i in range(self.state.n_material):
+            r = self.target[i] - (self.state.velocity[i] - dt * self.momentum.image[i])
+            self.residual[i] = r
+            self.shadow[i] = r
+            self.direction[i] = ti.Vector.zero(float, self.dim)
+            self.v[i] = ti.Vector.zero(float, self.dim)
+
+    @ti.kernel
+    def _new_direction(self, beta: float, omega: float):
+        """p = r + beta (p - omega v); operand = K^-1 p."""
+        ti.loop_config(serialize=runtime.serial_loops)
+        for i in range(self.state.n_material):
+            p = self.residual[i] + beta * (self.direction[i] - omega * self.v[i])
+            self.direction[i] = p
+            self.momentum.operand[i] = self.preconditioner[i] @ p
+
+    @ti.kernel
+    def _system_image(self, dt: float, out: ti.template()):
+        """out = (I - dt L) operand, with image = L operand."""
+        ti.loop_config(serialize=runtime.serial_loops)
+        for i in range(self.state.n_material):
+            out[i] = self.momentum.operand[i] - dt * self.momentum.image[i]
+
+    @ti.kernel
+    def _update(self, weight: float, image: ti.template()):
+        """x += weight operand; r -= weight image."""
+        ti.loop_config(serialize=runtime.serial_loops)
+        for i in range(self.state.n_material):
+            self.state.velocity[i] += weight * self.momentum.operand[i]
+            self.residual[i] -= weight * image[i]
+
+    @ti.kernel
+    def _precondition_residual(self):
+        ti.loop_config(serialize=runtime.serial_loops)
+        for i in range(self.state.n_material):
+            self.momentum.operand[i] = self.preconditioner[i] @ self.residual[i]
+
+    @ti.kernel
+    def _end(self, dt: float):
+        ti.loop_config(serialize=runtime.serial_loops)
+        for i in range(self.state.n_material):
+            self.state.viscous_acceleration[i] = (self.state.velocity[i] - self.target[i]) / dt
+
+    # ---- the solve ---------------------------------------------------------------------------
+
+    def _apply(self, dt: float, out) -> None:
+        self.momentum.apply_viscous()
+        self._system_image(dt, out)
+
+    def run(self) -> None:
+        """Solve (I - dt L) v = v* in place of the velocities (v* on entry)."""
+        dt = float(self.time_step[None])
+        self.momentum.compute_diagonal()
+        self._begin(dt)
+        target_norm = self._dot(self.target, self.target) ** 0.5
+        self.momentum.apply_viscous()
+        self._first_residual(dt)
+        goal = self.tolerance * target_norm
+        residual = self._dot(self.residual, self.residual) ** 0.5
+        rho = alpha = omega = 1.0
+        iterations = 0
+        while residual > goal:
+            if iterations >= self.max_iterations:
+                raise ViscousSolveError(
+                    f"implicit viscous solve did not converge: residual {residual / max(target_norm, 1e-300):.3g} "
+                    f"of |v*| after {iterations} iterations (numerics.viscous_max_iterations = "
+                    f"{self.max_iterations}, numerics.viscous_tolerance = {self.tolerance:g}; a smaller "
+                    f"numerics.cfl shortens the step)")
+            iterations += 1
+            rho_new = self._dot(self.shadow, self.residual)
+            if rho_new == 0.0 or omega == 0.0:  # breakdown: restart from the current iterate
+                self._restart(dt)
+                rho, alpha, omega = 1.0, 1.0, 1.0
+                continue
+            beta = (rho_new / rho) * (alpha / omega)
+            self._new_direction(beta, omega)
+            self._apply(dt, self.v)
+            alpha = rho_new / self._dot(self.shadow, self.v)
+            self._update(alpha, self.v)  # x += alpha y, s = r - alpha v (s kept in r)
+            residual = self._dot(self.residual, self.residual) ** 0.5
+            if residual <= goal:
+                break
+            self._precondition_residual()
+            self._apply(dt, self.t)
+            omega = self._dot(self.t, self.residual) / self._dot(self.t, self.t)
+            self._update(omega, self.t)  # x += omega z, r = s - omega t
+            residual = self._dot(self.residual, self.residual) ** 0.5
+            rho = rho_new
+        self._end(dt)
+        self.iterations += iterations
+        self.solves += 1
+        self.run_iterations += iterations
+        self.run_solves += 1
+
+    @ti.kernel
+    def _copy_velocity_to_operand(self):
+        ti.loop_config(serialize=runtime.serial_loops)
+        for i in range(self.state.n_material):
+            self.momentum.operand[i] = self.state.velocity[i]
+
+    def _restart(self, dt: float) -> None:
+        """Residual and shadow afresh from the current iterate (a BiCGSTAB breakdown)."""
+        self._copy_velocity_to_operand()
+        self.momentum.apply_viscous()
+        self._first_residual(dt)
+
+    def summary(self) -> str:
+        """One line for ``run --profile``."""
+        mean = self.run_iterations / self.run_solves if self.run_solves else 0.0
+        return f"implicit viscous solve: {self.run_solves} solves, {mean:.2f} BiCGSTAB iterations per step"
+
+    def take_statistics(self) -> dict:
+        """Mean iterations per solve since the last call (a diagnostics.csv column), and reset."""
+        mean = self.iterations / self.solves if self.solves else 0.0
+        self.iterations = self.solves = 0
+        return {"viscous_iterations": mean}
