@@ -640,10 +640,11 @@ class Numerics:
     momentum: Literal["stress_divergence", "viscous_pair"] = _key(
         "stress_divergence: sum m (sigma_i/rho_i^2 + sigma_j/rho_j^2) grad W; viscous_pair: [M27]",
         "stress_divergence")
-    viscosity: Literal["explicit", "implicit"] = _key(
+    viscosity: Optional[Literal["explicit", "implicit"]] = _key(
         "mu(I) viscous term: explicit (the step obeys the viscous limit of [M39]) or implicit (backward Euler, "
-        "solved by BiCGSTAB each step: only the acoustic limit sets the step; physics/implicit_viscosity.py)",
-        "explicit")
+        "solved by BiCGSTAB each step: only the acoustic limit sets the step; physics/implicit_viscosity.py). "
+        "Default: implicit for mu(I) with symplectic Verlet (same run-outs, 30-90x faster collapses, measured), "
+        "explicit otherwise", None)
     viscous_tolerance: float = _key(
         "implicit viscosity: the solve stops when |residual| <= this x |v*| (the velocities before the viscous "
         "update; against 1e-6, 1e-4 moves the velocities of a collapse by 5e-4 of their largest, measured)",
@@ -850,7 +851,7 @@ class Scene:
             raise ConfigError("numerics.bulk_viscosity",
                               "only the hypoplastic model has no equation of state to resist "
                                                          "compaction; set it to 0")
-        if self.numerics.viscosity == "implicit":
+        if self.numerics.viscosity == "implicit":  # asked for: must fit
             if self.material.model != "mu_i":
                 raise ConfigError("numerics.viscosity", "the implicit viscous update is for the mu(I) model's "
                                                         "regularised viscosity; set it to explicit")
@@ -867,6 +868,14 @@ class Scene:
                 raise ConfigError("domain.periodic",
                                   f"periodic axis {name} spans {self.domain.size[a]} m, less than three kernel "
                                   f"supports (3 x {support} m)")
+
+    @property
+    def implicit_viscosity(self) -> bool:
+        """Whether the viscous term is solved implicitly: ``numerics.viscosity``, by default for
+        mu(I) under symplectic Verlet (physics/implicit_viscosity.py)."""
+        if self.numerics.viscosity is not None:
+            return self.numerics.viscosity == "implicit"
+        return self.material.model == "mu_i" and self.numerics.integrator == "symplectic_verlet"
 
     def _check_size(self) -> None:
         """What would not fit in memory fails here, before anything is allocated: the neighbour grid

@@ -43,7 +43,7 @@ class _Update(Stage):
         self.shifting = ctx.scene.numerics.particle_shifting.enabled
         self.h = ctx.smoothing.h
         self.taylor_velocity = self.shifting and "velocity_gradient" in ctx.state.specs
-        self.implicit_viscosity = ctx.scene.numerics.viscosity == "implicit"  # physics/implicit_viscosity.py
+        self.implicit_viscosity = ctx.scene.implicit_viscosity  # physics/implicit_viscosity.py
         # the model's integrated tensors (the elastoplastic deviatoric stress): (field, rate, start)
         self.history = [tuple(ctx.state.field(name) for name in names) for names in ctx.model.history]
         if self.taylor_velocity:  # the Taylor correction's momentum, summed in fixed blocks (deterministic)

@@ -71,7 +71,7 @@ class Scheme:
         self.initial = initial if initial is not None else build_initial(scene, model)
         walls_cls = boundary_class(scene)
         rate_classes = rate_stage_classes(scene, model)
-        self.implicit_viscosity = scene.numerics.viscosity == "implicit"
+        self.implicit_viscosity = scene.implicit_viscosity
         integrator_cls = INTEGRATORS[scene.numerics.integrator]
         gradient_cls = GRADIENTS[scene.numerics.gradient_correction]
         specs = merge_specs([model.fields, walls_cls.fields, integrator_cls.fields, gradient_cls.fields]

@@ -56,6 +56,7 @@ def test_viscous_operator_is_negative_semidefinite(momentum, correction):
     which the scenes use, neither form is (the pair force is no longer along x_ij): hence
     BiCGSTAB. This test measures both."""
     sim = jittered(implicit_layer(momentum, gradient_correction=correction))
+    sim.scheme.viscous_solve.momentum.time_step[None] = 1e-3  # the solve's share of eta at that dt
     L = dense_operator(sim)
     mass = np.repeat(sim.state.mass.to_numpy()[: sim.state.n_material], 2)
     ML = mass[:, None] * L
@@ -105,6 +106,7 @@ def test_poiseuille_channel_at_a_hundred_times_the_explicit_step(momentum):
     h = scene.numerics.smoothing_length
     dt = 100 * 0.1 * rho.min() * h**2 / eta
     solve = scheme.viscous_solve
+    solve.momentum.cap_factor = 0.0  # the whole viscosity in the solve (before its kernels compile)
     y = state.position.to_numpy()[:n, 1]
     expected = g * rho.mean() / (2 * eta) * y * (height - y)
     velocity = np.zeros((state.n_total, 2))
@@ -122,13 +124,13 @@ def test_poiseuille_channel_at_a_hundred_times_the_explicit_step(momentum):
     u = velocity[:n, 0]
     assert np.all(np.isfinite(velocity))
     assert max(peaks) < 2.0 * expected.max()  # no overshoot, no growth
-    assert abs(peaks[-1] - peaks[-2]) < 1e-4 * peaks[-1]  # steady, to the solve's tolerance
+    assert abs(peaks[-1] - peaks[-2]) < 1e-3 * peaks[-1]  # steady, to the solve's tolerance
     error = np.abs(u - expected).max() / expected.max()
     if momentum == "stress_divergence":
         assert error < 0.03, error
     else:
         assert 0.1 < np.mean(u) / np.mean(expected) - 1.0 < 0.4, np.mean(u) / np.mean(expected)
-    assert np.abs(velocity[:n, 1]).max() < 1e-6 * expected.max()
+    assert np.abs(velocity[:n, 1]).max() < 1e-3 * expected.max()  # the solve's tolerance
 
 
 def small_collapse(viscosity):
@@ -139,39 +141,29 @@ def small_collapse(viscosity):
     return Simulation(build(data))
 
 
-def velocity_difference(fraction):
-    """Max |v_implicit - v_explicit| / max |v_explicit| after the first 6 x 10^-4 s of a small column
-    collapse, stepped with ``fraction`` of the explicit viscous limit."""
+def test_implicit_and_explicit_agree_for_a_small_time_step():
+    """A 4 cm column released at rest, 40 steps at the explicit viscous limit of [M39]: there
+    every grain's viscosity is within what the step takes explicitly, so the implicit scheme
+    leaves it all in the rate (momentum.viscosity_part) and its solve has nothing to do: the
+    velocities are the explicit ones, bit for bit."""
     runs = {}
     for viscosity in ("explicit", "implicit"):
         sim = small_collapse(viscosity)
         sim.scheme.prepare()
         runs[viscosity] = sim
-    limit = runs["explicit"].scheme.stable_time_step()
-    assert limit < 0.1 * runs["implicit"].scheme.stable_time_step()  # the limit implicit drops
-    dt = fraction * limit
+    dt = runs["explicit"].scheme.stable_time_step()
+    assert dt < 0.1 * runs["implicit"].scheme.stable_time_step()  # the limit implicit drops
     for sim in runs.values():
         t = 0.0
-        for _ in range(int(round(40 / fraction))):
+        for _ in range(40):
             sim.scheme.step(dt, t)
             t += dt
     n = runs["explicit"].state.n_material
     v_explicit = runs["explicit"].state.velocity.to_numpy()[:n]
     v_implicit = runs["implicit"].state.velocity.to_numpy()[:n]
-    scale = np.abs(v_explicit).max()
-    assert scale > 1e-3  # it moved
-    return np.abs(v_implicit - v_explicit).max() / scale
-
-
-def test_implicit_and_explicit_agree_for_a_small_time_step():
-    """A 4 cm column released at rest, 40 steps at the explicit viscous limit (then 80 at half
-    of it): the implicit update lands within 3 % of the explicit velocities (measured 1.6 %),
-    and the difference halves with dt (measured 1.61 %, 0.86 %, 0.43 % at 1, 1/2, 1/4 of it):
-    it is the first-order backward Euler, which vanishes with dt."""
-    full = velocity_difference(1.0)
-    half = velocity_difference(0.5)
-    assert full < 0.03, full
-    assert 1.6 < full / half < 2.4, (full, half)
+    assert np.abs(v_explicit).max() > 1e-3  # it moved
+    assert np.abs(v_implicit - v_explicit).max() <= 1e-14 * np.abs(v_explicit).max()
+    assert runs["implicit"].scheme.viscous_solve.run_iterations == 0
 
 
 def test_a_solve_that_does_not_converge_stops_the_run():

@@ -231,11 +231,12 @@ def baseline_option(case: Case, axis: str) -> str:
     from ..paths import config_path
 
     data = apply_overrides(yaml.safe_load(config_path(case.config).read_text()), case.overrides)
-    numerics = scene_from_dict(data).numerics
+    scene = scene_from_dict(data)
+    numerics = scene.numerics
     return {"smoothing": numerics.smoothing_function, "gradient_correction": numerics.gradient_correction,
             "integrator": numerics.integrator, "precision": data.get("precision", "f64"),
             "artificial_viscosity": f"alpha {numerics.artificial_viscosity.alpha:g}", "cfl": f"{numerics.cfl:g}",
-            "viscosity": numerics.viscosity}[axis]
+            "viscosity": "implicit" if scene.implicit_viscosity else "explicit"}[axis]
 
 
 def plan(cases: Sequence[Case]) -> List[Run]:

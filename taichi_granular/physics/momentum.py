@@ -25,9 +25,10 @@ Morris/Cleary pairwise viscous term and gravity,
 Both sums are antisymmetric in (i, j): momentum is conserved to round-off between material
 particles.
 
-With ``numerics.viscosity: implicit`` (mu(I)) the rate stage leaves out every term that is
-linear in the velocity through the viscosity (the deviatoric stress and the residual damping,
-or the [M27] pair term) and offers that same sum as a linear operator instead:
+With ``numerics.viscosity: implicit`` (mu(I)) each viscosity splits in two (``viscosity_part``):
+up to the explicit limit of [M39] at the step's dt it stays in the rate; the excess leaves every
+term that is linear in the velocity through the viscosity (the deviatoric stress and the
+residual damping, or the [M27] pair term), which offers that same sum as a linear operator:
 ``apply_viscous()`` writes L(operand) to ``image``, with the viscosity, densities, positions
 and kernel corrections of the rate evaluation frozen. physics/implicit_viscosity.py solves
 (I - dt L) v = v* with it. Ghost walls enter L as they enter the explicit term (their velocity
@@ -52,7 +53,10 @@ class _Momentum(Stage):
         self.gravity = ti.Vector.field(self.dim, float, shape=())
         self.gravity[None] = ctx.scene.gravity_vector
         self.eps2 = 0.01 * ctx.smoothing.h**2  # keeps r^2 away from zero [M27]
-        self.implicit = ctx.scene.numerics.viscosity == "implicit"
+        self.implicit = ctx.scene.implicit_viscosity
+        self.time_step = ctx.time_step
+        # implicit: viscosities up to the explicit limit of [M39] at the step's dt stay explicit
+        self.cap_factor = ctx.scene.numerics.cfl * 0.1 * ctx.smoothing.h**2  # eta_cap = this rho/dt [m^2]
         if self.implicit:
             # the operand spans every particle so that any wall's velocity lookup stays in range
             self.operand = ti.Vector.field(self.dim, float, ctx.state.n_total)  # velocity-like [m/s]
@@ -60,11 +64,31 @@ class _Momentum(Stage):
             self.diagonal = ti.Matrix.field(self.dim, self.dim, float, ctx.state.n_material)  # d L_i/d v_i [1/s]
 
     @ti.func
-    def viscous_coefficient(self, i, j, k, v_ij, x_ij, r):
+    def viscosity_part(self, k, part: ti.template()):
+        """The viscosity of particle k that the explicit term (part 0) or the implicit solve (part 1)
+        takes [Pa s]. Explicit scheme: all of it in part 0. Implicit: part 0 is eta up to
+        eta_cap = cfl 0.1 rho h^2/dt, the most the step can take explicitly ([M39]), part 1 the rest:
+        a grain that flows at that dt is stepped exactly as by the explicit scheme, and only the
+        stiff excess (grains near or below yield, eta up to eta_hat_max) goes to the solve."""
+        eta = self.state.viscosity[k]
+        if ti.static(self.implicit):
+            dt = self.time_step[None]
+            cap = 0.0  # no step yet (the initial rates): all of it implicit, none in the first kick
+            if dt > 0.0:
+                cap = self.cap_factor * self.state.density[k] / dt
+            if ti.static(part == 0):
+                eta = ti.min(eta, cap)
+            else:
+                eta = ti.max(eta - cap, 0.0)
+        return eta
+
+    @ti.func
+    def viscous_coefficient(self, i, j, k, v_ij, x_ij, r, part: ti.template()):
         """m_j 2(d+2) eta_ij (v_ij . x_ij) / (rho_i rho_j (r^2 + 0.01 h^2)) of [M27], with the
-        harmonic mean eta_ij = 2 eta_i eta_j/(eta_i + eta_j)  [m^2/s^2, times grad W]."""
+        harmonic mean eta_ij = 2 eta_i eta_j/(eta_i + eta_j) of the viscosities' ``part``
+        [m^2/s^2, times grad W]."""
         s = self.state
-        eta_i, eta_j = s.viscosity[i], s.viscosity[k]
+        eta_i, eta_j = self.viscosity_part(i, part), self.viscosity_part(k, part)
         eta_ij = 0.0
         if eta_i + eta_j > 0.0:
             eta_ij = 2.0 * eta_i * eta_j / (eta_i + eta_j)
@@ -87,7 +111,7 @@ class _Momentum(Stage):
         stress form too, whose own diagonal it approximates)  [1/s]."""
         k = self.walls.state_index(i, j)
         unit = x_ij / (r * r)  # v_ij . x_ij = 1: the coefficient alone
-        block += self.walls.self_factor(i, j, x_ij) * self.viscous_coefficient(i, j, k, unit, x_ij, r) * \
+        block += self.walls.self_factor(i, j, x_ij) * self.viscous_coefficient(i, j, k, unit, x_ij, r, 1) * \
             self.gradient.pairwise(i, j, x_ij, r).outer_product(x_ij)
 
     @ti.kernel
@@ -97,6 +121,15 @@ class _Momentum(Stage):
             block = ti.Matrix.zero(float, self.dim, self.dim)
             self.grid.for_each_neighbor(i, self.diagonal_pair, block)
             self.diagonal[i] = block
+
+    @ti.kernel
+    def max_implicit_viscosity(self) -> float:
+        """The largest viscosity part left to the solve [Pa s]: 0 when the step takes it all explicitly."""
+        result = 0.0
+        ti.loop_config(serialize=runtime.serial_loops)
+        for i in range(self.state.n_material):
+            ti.atomic_max(result, self.viscosity_part(i, 1))
+        return result
 
     def apply_viscous(self) -> None:
         """image = L(operand): the viscous acceleration the explicit term would give the operand."""
@@ -114,15 +147,14 @@ class ViscousMomentum(_Momentum):
         k = self.walls.state_index(i, j)
         coefficient = -s.mass[j] * (s.pressure[i] / s.density[i] ** 2
                                     + self.walls.pressure(i, j, x_ij) / s.density[k] ** 2)
-        if ti.static(not self.implicit):
-            coefficient += self.viscous_coefficient(i, j, k, self.walls.relative_velocity(i, j, x_ij), x_ij, r)
+        coefficient += self.viscous_coefficient(i, j, k, self.walls.relative_velocity(i, j, x_ij), x_ij, r, 0)
         acc += coefficient * self.gradient.pairwise(i, j, x_ij, r)
 
     @ti.func
     def viscous_pair(self, i, j, x_ij, r, acc: ti.template()):
         k = self.walls.state_index(i, j)
         v_ij = self.walls.relative(self.operand, i, j, x_ij)
-        acc += self.viscous_coefficient(i, j, k, v_ij, x_ij, r) * self.gradient.pairwise(i, j, x_ij, r)
+        acc += self.viscous_coefficient(i, j, k, v_ij, x_ij, r, 1) * self.gradient.pairwise(i, j, x_ij, r)
 
     @ti.kernel
     def _apply(self):
@@ -146,7 +178,8 @@ class StressMomentum(_Momentum):
             self.operand_gradient = ti.Matrix.field(self.dim, self.dim, float, ctx.state.n_material)  # [1/s]
 
     @ti.func
-    def residual_damping(self, i, j, x_ij, r, grad_w, velocity: ti.template(), gradient: ti.template()):
+    def residual_damping(self, i, j, x_ij, r, grad_w, velocity: ti.template(), gradient: ti.template(),
+                         part: ti.template()):
         """The [M27] pair term of the velocity residual v_ij - (grad v_i + grad v_j)/2 . x_ij (zero for
         quadratic fields). A boundary particle that is its own state (extrapolated walls) has no
         gradient or viscosity of its own: it lends i's  [m/s^2]."""
@@ -155,7 +188,7 @@ class StressMomentum(_Momentum):
         if k >= self.state.n_material:
             m = i
         v_residual = self.walls.relative(velocity, i, j, x_ij) - 0.5 * (gradient[i] + gradient[m]) @ x_ij
-        return self.viscous_coefficient(i, j, m, v_residual, x_ij, r) * grad_w
+        return self.viscous_coefficient(i, j, m, v_residual, x_ij, r, part) * grad_w
 
     @ti.func
     def pair(self, i, j, x_ij, r, acc: ti.template()):
@@ -163,10 +196,14 @@ class StressMomentum(_Momentum):
         k = self.walls.state_index(i, j)
         identity = ti.Matrix.identity(float, self.dim)
         grad_w = self.gradient.pairwise(i, j, x_ij, r)
-        if ti.static(self.implicit):  # pressure only: the viscous stress is the solve's
-            term = -s.pressure[i] / s.density[i] ** 2 * identity + \
-                self.walls.stress(i, j, x_ij, -s.pressure[k] * identity) / s.density[k] ** 2
-            acc += s.mass[j] * (term @ grad_w)
+        if ti.static(self.implicit):  # the viscous stress of the explicit part; the rest is the solve's
+            m = self.walls.stress_index(i, j)
+            sigma_i = self.model.viscous_stress(self.viscosity_part(i, 0), s.velocity_gradient[i]) - \
+                s.pressure[i] * identity
+            sigma_j = self.walls.stress(i, j, x_ij, self.model.viscous_stress(
+                self.viscosity_part(m, 0), s.velocity_gradient[m]) - s.pressure[k] * identity)
+            acc += s.mass[j] * ((sigma_i / s.density[i] ** 2 + sigma_j / s.density[k] ** 2) @ grad_w)
+            acc += self.residual_damping(i, j, x_ij, r, grad_w, s.velocity, s.velocity_gradient, 0)
         else:
             sigma_i = self.model.deviatoric_stress(i) - s.pressure[i] * identity
             sigma_j = self.walls.stress(i, j, x_ij, self.model.deviatoric_stress(self.walls.stress_index(i, j))
@@ -174,7 +211,7 @@ class StressMomentum(_Momentum):
             term = sigma_i / s.density[i] ** 2 + sigma_j / s.density[k] ** 2
             acc += s.mass[j] * (term @ grad_w)
             if ti.static(self.viscous_residual):
-                acc += self.residual_damping(i, j, x_ij, r, grad_w, s.velocity, s.velocity_gradient)
+                acc += self.residual_damping(i, j, x_ij, r, grad_w, s.velocity, s.velocity_gradient, 0)
 
     @ti.func
     def operand_gradient_pair(self, i, j, x_ij, r, gradient: ti.template()):
@@ -184,12 +221,12 @@ class StressMomentum(_Momentum):
     def viscous_pair(self, i, j, x_ij, r, acc: ti.template()):
         s = self.state
         k = self.walls.state_index(i, j)
-        sigma_i = self.model.viscous_stress(s.viscosity[i], self.operand_gradient[i])
+        sigma_i = self.model.viscous_stress(self.viscosity_part(i, 1), self.operand_gradient[i])
         m = self.walls.stress_index(i, j)
-        sigma_j = self.model.viscous_stress(s.viscosity[m], self.operand_gradient[m])
+        sigma_j = self.model.viscous_stress(self.viscosity_part(m, 1), self.operand_gradient[m])
         grad_w = self.gradient.pairwise(i, j, x_ij, r)
         acc += s.mass[j] * ((sigma_i / s.density[i] ** 2 + sigma_j / s.density[k] ** 2) @ grad_w)
-        acc += self.residual_damping(i, j, x_ij, r, grad_w, self.operand, self.operand_gradient)
+        acc += self.residual_damping(i, j, x_ij, r, grad_w, self.operand, self.operand_gradient, 1)
 
     @ti.kernel
     def _operand_gradient(self):

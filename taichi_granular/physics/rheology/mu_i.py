@@ -64,7 +64,7 @@ class MuIRheology:
     @classmethod
     def from_scene(cls, scene):
         return cls(scene.material, scene.dimension, scene.numerics.smoothing_length, scene.precision,
-                   implicit_viscosity=scene.numerics.viscosity == "implicit")
+                   implicit_viscosity=scene.implicit_viscosity)
 
     # integrated per-particle quantities besides x, v, rho: none (the stress is algebraic)
     history = ()
