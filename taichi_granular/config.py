@@ -640,11 +640,11 @@ class Numerics:
     momentum: Literal["stress_divergence", "viscous_pair"] = _key(
         "stress_divergence: sum m (sigma_i/rho_i^2 + sigma_j/rho_j^2) grad W; viscous_pair: [M27]",
         "stress_divergence")
-    viscosity: Optional[Literal["explicit", "implicit"]] = _key(
-        "mu(I) viscous term: explicit (the step obeys the viscous limit of [M39]) or implicit (backward Euler, "
-        "solved by BiCGSTAB each step: only the acoustic limit sets the step; physics/implicit_viscosity.py). "
-        "Default: implicit for mu(I) with symplectic Verlet (same run-outs, 30-90x faster collapses, measured), "
-        "explicit otherwise", None)
+    viscosity: Literal["explicit", "implicit"] = _key(
+        "mu(I) viscous term: explicit (the step obeys the viscous limit of [M39]) or implicit (the viscosity above "
+        "that limit solved by backward Euler, BiCGSTAB, each step: only the acoustic limit sets the step, 50-200x "
+        "fewer steps on the collapses; physics/implicit_viscosity.py). Explicit stays the default until the "
+        "implicit run-outs of the tall columns match it (README, implicit viscosity)", "explicit")
     viscous_tolerance: float = _key(
         "implicit viscosity: the solve stops when |residual| <= this x |v*| (the velocities before the viscous "
         "update; against 1e-6, 1e-4 moves the velocities of a collapse by 5e-4 of their largest, measured)",
@@ -871,11 +871,8 @@ class Scene:
 
     @property
     def implicit_viscosity(self) -> bool:
-        """Whether the viscous term is solved implicitly: ``numerics.viscosity``, by default for
-        mu(I) under symplectic Verlet (physics/implicit_viscosity.py)."""
-        if self.numerics.viscosity is not None:
-            return self.numerics.viscosity == "implicit"
-        return self.material.model == "mu_i" and self.numerics.integrator == "symplectic_verlet"
+        """Whether the viscous term is solved implicitly (physics/implicit_viscosity.py)."""
+        return self.numerics.viscosity == "implicit"
 
     def _check_size(self) -> None:
         """What would not fit in memory fails here, before anything is allocated: the neighbour grid
