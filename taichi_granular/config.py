@@ -646,7 +646,7 @@ class Numerics:
         "stress_divergence")
     viscosity: Literal["explicit", "implicit"] = _key(
         "mu(I) viscous term: explicit (the step obeys the viscous limit of [M39]) or implicit (the viscosity above "
-        "that limit solved by backward Euler, BiCGSTAB, each step: only the acoustic limit sets the step, 50-200x "
+        "that limit solved by backward Euler, BiCGSTAB, each step: only the acoustic limit sets the step, 90-270x "
         "fewer steps on the collapses; physics/implicit_viscosity.py). Explicit stays the default until the "
         "implicit run-outs of the tall columns match it (README, implicit viscosity)", "explicit")
     viscous_tolerance: float = _key(
