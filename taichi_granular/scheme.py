@@ -71,14 +71,13 @@ class Scheme:
         self.initial = initial if initial is not None else build_initial(scene, model)
         walls_cls = boundary_class(scene)
         rate_classes = rate_stage_classes(scene, model)
-        self.implicit_viscosity = scene.implicit_viscosity
         integrator_cls = INTEGRATORS[scene.numerics.integrator]
         gradient_cls = GRADIENTS[scene.numerics.gradient_correction]
         specs = merge_specs([model.fields, walls_cls.fields, integrator_cls.fields, gradient_cls.fields]
                             + [cls.fields for cls in rate_classes + model.update_stage_classes()
                                + walls_cls.position_stage_classes(scene)]
                             + ([Outflow.fields] if scene.domain.outflow else [])
-                            + ([ImplicitViscosity.fields] if self.implicit_viscosity else []))
+                            + ([ImplicitViscosity.fields] if scene.implicit_viscosity else []))
         ini = self.initial
         runtime.choose_loops(ini.n_total)
         self.state = ParticleState(scene.dimension, ini.n_material, ini.n_wall, specs)
@@ -103,7 +102,7 @@ class Scheme:
         self.rate_stages = [cls(ctx) for cls in rate_classes]
         self.integrator = integrator_cls(ctx)
         self.viscous_solve = None  # physics/implicit_viscosity.py, between the kick and the drift
-        if self.implicit_viscosity:
+        if scene.implicit_viscosity:
             momentum = next(stage for stage in self.rate_stages if hasattr(stage, "apply_viscous"))
             self.viscous_solve = ImplicitViscosity(ctx, momentum)
         # after every update: walls act on the new positions, the model on the new state

@@ -191,27 +191,26 @@ class StressMomentum(_Momentum):
         return self.viscous_coefficient(i, j, m, v_residual, x_ij, r, part) * grad_w
 
     @ti.func
+    def rate_deviatoric(self, k):
+        """The deviatoric stress of particle k in the rate [Pa]: the model's, or with the implicit
+        viscous update the part of its viscous stress that stays explicit."""
+        if ti.static(self.implicit):
+            return self.model.viscous_stress(self.viscosity_part(k, 0), self.state.velocity_gradient[k])
+        else:
+            return self.model.deviatoric_stress(k)
+
+    @ti.func
     def pair(self, i, j, x_ij, r, acc: ti.template()):
         s = self.state
         k = self.walls.state_index(i, j)
         identity = ti.Matrix.identity(float, self.dim)
         grad_w = self.gradient.pairwise(i, j, x_ij, r)
-        if ti.static(self.implicit):  # the viscous stress of the explicit part; the rest is the solve's
-            m = self.walls.stress_index(i, j)
-            sigma_i = self.model.viscous_stress(self.viscosity_part(i, 0), s.velocity_gradient[i]) - \
-                s.pressure[i] * identity
-            sigma_j = self.walls.stress(i, j, x_ij, self.model.viscous_stress(
-                self.viscosity_part(m, 0), s.velocity_gradient[m]) - s.pressure[k] * identity)
-            acc += s.mass[j] * ((sigma_i / s.density[i] ** 2 + sigma_j / s.density[k] ** 2) @ grad_w)
+        sigma_i = self.rate_deviatoric(i) - s.pressure[i] * identity
+        sigma_j = self.walls.stress(i, j, x_ij, self.rate_deviatoric(self.walls.stress_index(i, j))
+                                    - s.pressure[k] * identity)
+        acc += s.mass[j] * ((sigma_i / s.density[i] ** 2 + sigma_j / s.density[k] ** 2) @ grad_w)
+        if ti.static(self.viscous_residual):
             acc += self.residual_damping(i, j, x_ij, r, grad_w, s.velocity, s.velocity_gradient, 0)
-        else:
-            sigma_i = self.model.deviatoric_stress(i) - s.pressure[i] * identity
-            sigma_j = self.walls.stress(i, j, x_ij, self.model.deviatoric_stress(self.walls.stress_index(i, j))
-                                        - s.pressure[k] * identity)
-            term = sigma_i / s.density[i] ** 2 + sigma_j / s.density[k] ** 2
-            acc += s.mass[j] * (term @ grad_w)
-            if ti.static(self.viscous_residual):
-                acc += self.residual_damping(i, j, x_ij, r, grad_w, s.velocity, s.velocity_gradient, 0)
 
     @ti.func
     def operand_gradient_pair(self, i, j, x_ij, r, gradient: ti.template()):
