@@ -34,6 +34,10 @@ def test_fronts_ignore_a_detached_grain_and_rest_follows_the_energy():
               "outflow": flags}
     m = cc.measure_frame(arrays, n + 2, 0.0, dp, 0.0, 2.6 * dp)
     assert m.front_right == pytest.approx(0.05) and m.escaped == 3
+    # a clump of three grains that has run ahead (each has neighbours) is not the front either
+    clump = np.vstack([pos, [[0.2, 0.005], [0.21, 0.005], [0.2, 0.015]]])
+    arrays = {"position": clump, "mass": np.full(n + 3, 1.0), "density": np.full(n + 3, 1.0 / dp**2)}
+    assert cc.measure_frame(arrays, n + 3, 0.0, dp, 0.0, 2.6 * dp).front_right == pytest.approx(0.05)
     t = np.linspace(0, 1, 11)
     ke = np.array([0, 5, 10, 4, 1, 0.1, 0.02, 0.009, 0.005, 0.004, 0.004])
     assert cc.time_to_rest(t, ke) == pytest.approx(0.7)
@@ -49,6 +53,18 @@ def test_connected_equals_brute_force(dim):
     expected = (d < 0.01).any(axis=1)
     assert 0 < expected.sum() < len(x)
     np.testing.assert_array_equal(cc.connected(x, 0.01), expected)
+
+
+def test_main_body_is_the_largest_cluster_and_the_bulk_extent_a_mass_quantile():
+    rng = np.random.default_rng(7)
+    chain = np.c_[np.arange(300) * 0.009, np.zeros(300)]  # one long chain: 300 hops, one cluster
+    blob = rng.random((50, 2)) * 0.05 + [10.0, 0.0]
+    body = cc.main_body(np.vstack([chain, blob]), 0.01)
+    assert body[:300].all() and not body[300:].any()
+    # uniform mass on [0, 1): 98 % of it below 0.98
+    value = (np.arange(1000) + 0.5) / 1000
+    assert cc.mass_quantile(value[::-1], np.ones(1000), 0.98) == pytest.approx(0.98, abs=1e-9)
+    assert cc.mass_quantile(value, np.r_[np.ones(500), np.zeros(500)], 0.5) == pytest.approx(0.25, abs=2e-3)
 
 
 def test_front_stop_is_read_when_the_front_slows_to_a_creep():

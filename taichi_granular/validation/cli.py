@@ -124,10 +124,10 @@ def validate_column_collapse(args) -> int:
         return "" if t is None else f"{t:.4f}"
 
     buf.write("case,aspect_ratio,runout,runout_lube,error,deposit_height,front_stop_time,creep_speed,"
-              "runout_end,end_time,time_to_rest,final_energy_fraction,escaped\n")
+              "runout_end,bulk_runout_end,end_time,time_to_rest,final_energy_fraction,escaped\n")
     for r in results:
         buf.write(f"{r.name},{r.aspect_ratio:.4f},{r.runout:.4f},{r.runout_reference:.4f},{r.error:.4f},"
-                  f"{r.deposit_height:.5f},{opt(r.front_stop_time)},{r.creep_speed:.3e},{r.runout_end:.4f},"
+                  f"{r.deposit_height:.5f},{opt(r.front_stop_time)},{r.creep_speed:.3e},{r.runout_end:.4f},{r.bulk_runout_end:.4f},"
                   f"{r.end_time:.4f},{opt(r.time_to_rest)},{r.final_energy_fraction:.3e},{r.escaped}\n")
     atomic_write_text(base / "runout.csv", buf.getvalue())
     a = np.linspace(0.01, max(3.2, max(r.aspect_ratio for r in results) * 1.05), 200)
