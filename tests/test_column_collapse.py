@@ -75,6 +75,12 @@ def test_front_stop_is_read_when_the_front_slows_to_a_creep():
     assert cc.front_stop(t, front) == 4  # 8.0 -> 8.04 mm in 0.02 s: 2 mm/s, 1.3 % of the peak
     assert cc.front_stop(t, front + 0.05 * t) is None  # still moving at 33 % of its peak
     assert cc.front_stop(t[:2], front[:2]) is None
+    # a pause is not a stop: the tip steps back (it detached) and the front then runs on
+    surge = np.array([0.0, 1.0, 3.0, 6.0, 5.9, 8.0, 11.0, 11.02]) * 1e-3
+    assert cc.front_stop(t, surge) == 6
+    # a grain joining the tip after the stop moves the reading by one spacing: still stopped
+    joined = np.array([0.0, 1.0, 3.0, 6.0, 8.0, 8.04, 9.0, 8.1]) * 1e-3
+    assert cc.front_stop(t, joined) == 6 and cc.front_stop(t, joined, tolerance=1e-3) == 4
 
 
 def test_coarse_collapse_spreads_towards_the_lube_runout():

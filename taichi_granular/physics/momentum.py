@@ -25,7 +25,8 @@ Morris/Cleary pairwise viscous term and gravity,
 Both sums are antisymmetric in (i, j): momentum is conserved to round-off between material
 particles.
 
-With ``numerics.viscosity: implicit`` (mu(I)) each viscosity splits in two (``viscosity_part``):
+With ``numerics.viscosity: implicit`` (mu(I)) each viscosity splits in two (``viscosity_part``
+for a particle's stress, ``pair_viscosity`` for a pair term's harmonic mean, split as a whole):
 up to the explicit limit of [M39] at the step's dt it stays in the rate; the excess leaves every
 term that is linear in the velocity through the viscosity (the deviatoric stress and the
 residual damping, or the [M27] pair term), which offers that same sum as a linear operator:
@@ -64,18 +65,14 @@ class _Momentum(Stage):
             self.diagonal = ti.Matrix.field(self.dim, self.dim, float, ctx.state.n_material)  # d L_i/d v_i [1/s]
 
     @ti.func
-    def viscosity_part(self, k, part: ti.template()):
-        """The viscosity of particle k that the explicit term (part 0) or the implicit solve (part 1)
-        takes [Pa s]. Explicit scheme: all of it in part 0. Implicit: part 0 is eta up to
-        eta_cap = cfl 0.1 rho h^2/dt, the most the step can take explicitly ([M39]), part 1 the rest:
-        a grain that flows at that dt is stepped exactly as by the explicit scheme, and only the
-        stiff excess (grains near or below yield, eta up to eta_hat_max) goes to the solve."""
-        eta = self.state.viscosity[k]
+    def _split(self, eta, density, part: ti.template()):
+        """Part 0 of a viscosity eta [Pa s] is eta up to eta_cap = cfl 0.1 rho h^2/dt, the most the step
+        can take explicitly ([M39]); part 1 the rest. Explicit scheme: all of it in part 0."""
         if ti.static(self.implicit):
             dt = self.time_step[None]
             cap = 0.0  # no step yet (the initial rates): all of it implicit, none in the first kick
             if dt > 0.0:
-                cap = self.cap_factor * self.state.density[k] / dt
+                cap = self.cap_factor * density / dt
             if ti.static(part == 0):
                 eta = ti.min(eta, cap)
             else:
@@ -83,16 +80,33 @@ class _Momentum(Stage):
         return eta
 
     @ti.func
-    def viscous_coefficient(self, i, j, k, v_ij, x_ij, r, part: ti.template()):
-        """m_j 2(d+2) eta_ij (v_ij . x_ij) / (rho_i rho_j (r^2 + 0.01 h^2)) of [M27], with the
-        harmonic mean eta_ij = 2 eta_i eta_j/(eta_i + eta_j) of the viscosities' ``part``
-        [m^2/s^2, times grad W]."""
+    def viscosity_part(self, k, part: ti.template()):
+        """The viscosity of particle k that the explicit term (part 0) or the implicit solve (part 1)
+        takes [Pa s]: a grain that flows at the step's dt is stepped exactly as by the explicit
+        scheme, and only the stiff excess (grains near or below yield, eta up to eta_hat_max) goes
+        to the solve."""
+        return self._split(self.state.viscosity[k], self.state.density[k], part)
+
+    @ti.func
+    def pair_viscosity(self, i, k, part: ti.template()):
+        """The pair viscosity of [M27], the harmonic mean eta_ij = 2 eta_i eta_j/(eta_i + eta_j), split
+        as a whole (not per particle), so that the parts sum to the pair's own eta_ij: splitting
+        each particle's viscosity first lost up to a quarter of it at a flowing/static interface.
+        The cap of the larger density keeps part 1 zero whenever every particle's is (the solve is
+        skipped then)  [Pa s]."""
         s = self.state
-        eta_i, eta_j = self.viscosity_part(i, part), self.viscosity_part(k, part)
+        eta_i, eta_k = s.viscosity[i], s.viscosity[k]
         eta_ij = 0.0
-        if eta_i + eta_j > 0.0:
-            eta_ij = 2.0 * eta_i * eta_j / (eta_i + eta_j)
-        return s.mass[j] * 2.0 * (self.dim + 2) * eta_ij * v_ij.dot(x_ij) / (
+        if eta_i + eta_k > 0.0:
+            eta_ij = 2.0 * eta_i * eta_k / (eta_i + eta_k)
+        return self._split(eta_ij, ti.max(s.density[i], s.density[k]), part)
+
+    @ti.func
+    def viscous_coefficient(self, i, j, k, v_ij, x_ij, r, part: ti.template()):
+        """m_j 2(d+2) eta_ij (v_ij . x_ij) / (rho_i rho_j (r^2 + 0.01 h^2)) of [M27] with the pair
+        viscosity's ``part`` [m^2/s^2, times grad W]."""
+        s = self.state
+        return s.mass[j] * 2.0 * (self.dim + 2) * self.pair_viscosity(i, k, part) * v_ij.dot(x_ij) / (
             s.density[i] * s.density[k] * (r * r + self.eps2))
 
     @ti.kernel
