@@ -69,7 +69,8 @@ def test_main_body_is_the_largest_cluster_and_the_bulk_extent_a_mass_quantile():
 
 def test_front_stop_is_read_when_the_front_slows_to_a_creep():
     """The shape measured on case a = 0.19: the front accelerates, stops within a frame and then
-    creeps at ~1 % of its peak speed; the stop is the first frame after the peak below 5 %."""
+    creeps at ~1 % of its peak speed; the stop is the first frame after the peak from which it
+    never again runs ahead faster than 5 % of that peak."""
     t = np.arange(8) * 0.02
     front = np.array([0.0, 1.0, 3.0, 6.0, 8.0, 8.04, 8.08, 8.12]) * 1e-3  # peak speed 0.15 m/s
     assert cc.front_stop(t, front) == 4  # 8.0 -> 8.04 mm in 0.02 s: 2 mm/s, 1.3 % of the peak
@@ -78,9 +79,9 @@ def test_front_stop_is_read_when_the_front_slows_to_a_creep():
     # a pause is not a stop: the tip steps back (it detached) and the front then runs on
     surge = np.array([0.0, 1.0, 3.0, 6.0, 5.9, 8.0, 11.0, 11.02]) * 1e-3
     assert cc.front_stop(t, surge) == 6
-    # a grain joining the tip after the stop moves the reading by one spacing: still stopped
+    # a grain joining the tip after the stop moves the reading on: the stop is read after it
     joined = np.array([0.0, 1.0, 3.0, 6.0, 8.0, 8.04, 9.0, 8.1]) * 1e-3
-    assert cc.front_stop(t, joined) == 6 and cc.front_stop(t, joined, tolerance=1e-3) == 4
+    assert cc.front_stop(t, joined) == 6
 
 
 def test_coarse_collapse_spreads_towards_the_lube_runout():

@@ -20,8 +20,8 @@ so a deposit whose surface slopes creeps at a strain rate of about (tau/tau_y)/m
 decay. The front stops abruptly (its speed drops by two orders of magnitude within two frames)
 and then creeps at about 1 % of its peak speed for as long as the run goes on. r_inf is read
 where an experimentalist reads it, when the front stops: the first frame after the front's peak
-speed from which it never again runs ahead faster than FRONT_STOP_FRACTION of that peak (within
-one particle spacing, the reading's resolution; a pause followed by a second surge is no stop). The creep speed
+speed from which it never again runs ahead faster than FRONT_STOP_FRACTION of that peak (a
+pause followed by a second surge is no stop). The creep speed
 afterwards and the kinetic energy left at the end are reported beside it.
 """
 from __future__ import annotations
@@ -195,14 +195,11 @@ HEADER = (f"{'case':<16} {'a':>5} {'run-out':>8} {'Lube':>8} {'error':>9} {'H_in
           f"{'creep mm/s':>8} {'at end':>7} {'bulk end':>7} {'end s':>6} {'rest s':>6} {'KE_end/pk':>9} {'escaped':>7}")
 
 
-def front_stop(times: Sequence[float], front: Sequence[float], tolerance: float = 0.0) -> Optional[int]:
+def front_stop(times: Sequence[float], front: Sequence[float]) -> Optional[int]:
     """Index of the first frame after the front's peak speed from which it never again gets
-    further ahead than FRONT_STOP_FRACTION of that peak speed times the elapsed time, plus
-    ``tolerance`` [m] (one particle spacing: a grain joining or leaving the tip moves the reading
-    by that much in one frame); None if there is no such frame before the last.
-
-    A pause is not a stop: a front that halts (or whose tip detaches, so that it steps back) and
-    then runs on is still moving."""
+    further ahead than FRONT_STOP_FRACTION of that peak speed times the elapsed time; None if
+    there is no such frame before the last. A pause is not a stop: a front that halts (or whose
+    tip detaches, so that the reading steps back) and then runs on is still moving."""
     t, x = np.asarray(times, float), np.asarray(front, float)
     if len(t) < 3:
         return None
@@ -212,7 +209,7 @@ def front_stop(times: Sequence[float], front: Sequence[float], tolerance: float 
         return None
     for k in range(peak + 1, len(t) - 1):
         ahead = x[k + 1:] - x[k]
-        if np.all(ahead <= FRONT_STOP_FRACTION * speed[peak] * (t[k + 1:] - t[k]) + tolerance):
+        if np.all(ahead <= FRONT_STOP_FRACTION * speed[peak] * (t[k + 1:] - t[k])):
             return k
     return None
 
