@@ -655,6 +655,14 @@ class Numerics:
         1e-4, "-", bounds="[1e-14, 0.1]")
     viscous_max_iterations: int = _key("implicit viscosity: the most BiCGSTAB iterations of one solve; a solve "
                                        "that needs more stops the run", 200, bounds="[1, 1e5]")
+    viscous_picard_iterations: int = _key(
+        "implicit viscosity: solves per step; after each but the last the strain rate and the viscosity are "
+        "re-evaluated at the mid-step velocity (v(n) + v(n+1))/2 (Picard iteration on eta, which one solve "
+        "lags by half a step)", 1, bounds="[1, 20]")
+    neighbour_skin: float = _key(
+        "Verlet-list skin as a fraction of h: each particle's neighbours within 2h + skin are listed and the "
+        "list rebuilt only when a particle has moved more than half the skin (neighbors.py); 0 scans the cells "
+        "in every pair loop", 0.0, "-", bounds="[0, 2]")
     gradient_correction: Literal["scalar", "matrix", "none"] = _key(
         "kernel gradient renormalisation: full matrix M^-1 (exact for linear fields, also at walls and "
         "free surfaces), scalar d/tr(M), or none", "matrix")

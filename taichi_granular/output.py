@@ -26,8 +26,9 @@ from .config import Scene, dump_scene
 
 DIAGNOSTIC_COLUMNS = ("t", "step", "dt", "kinetic_energy", "max_speed", "max_density_error", "mach")
 # particles that left by an open face (domain.outflow); mean iterations per step of the implicit
-# viscous solve since the previous row (numerics.viscosity: implicit)
-OPTIONAL_DIAGNOSTIC_COLUMNS = ("outflow", "viscous_iterations")
+# viscous solve since the previous row (numerics.viscosity: implicit) and, with Picard iterations,
+# the mean change of the velocities by the re-solves, per |v*|
+OPTIONAL_DIAGNOSTIC_COLUMNS = ("outflow", "viscous_iterations", "viscous_picard_change")
 INTEGER_DIAGNOSTIC_COLUMNS = ("step", "outflow")
 
 

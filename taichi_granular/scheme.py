@@ -11,7 +11,7 @@ import numpy as np
 import taichi as ti
 
 from . import runtime
-from .neighbors import NeighborGrid, NeighbourSearch
+from .neighbors import NeighborGrid, NeighbourSearch, list_capacity
 from .integrators import INTEGRATORS, StableTimeStep
 from .physics.artificial_stress import ArtificialStress
 from .physics.artificial_viscosity import ArtificialViscosity
@@ -88,8 +88,11 @@ class Scheme:
         model.state = self.state
         self.model = model
         self.smoothing = make_smoothing(scene.numerics.smoothing_function, scene.numerics.smoothing_length, scene.dimension)
+        skin = scene.numerics.neighbour_skin * self.smoothing.h
+        capacity = list_capacity(scene.dimension, self.smoothing.support + skin, scene.numerics.particle_spacing)
         self.grid = NeighborGrid(self.state.position, scene.domain.lower, scene.domain.upper,
-                                 scene.domain.periodic_mask, self.smoothing.support, n_moving=ini.n_material)
+                                 scene.domain.periodic_mask, self.smoothing.support, n_moving=ini.n_material,
+                                 skin=skin, capacity=capacity if skin > 0.0 else 0)
         self.walls = walls_cls(self.state, scene.gravity_vector)
         self.dt = ti.field(float, shape=())
         self.time = ti.field(float, shape=())
@@ -104,7 +107,10 @@ class Scheme:
         self.viscous_solve = None  # physics/implicit_viscosity.py, between the kick and the drift
         if scene.implicit_viscosity:
             momentum = next(stage for stage in self.rate_stages if hasattr(stage, "apply_viscous"))
-            self.viscous_solve = ImplicitViscosity(ctx, momentum)
+            # a Picard iteration re-evaluates the viscosity: the stages from the strain rate to it
+            names = [stage.name for stage in self.rate_stages]
+            refresh = self.rate_stages[names.index("strain_rate"):names.index("regularised_viscosity") + 1]
+            self.viscous_solve = ImplicitViscosity(ctx, momentum, refresh)
         # after every update: walls act on the new positions, the model on the new state
         outflow = [Outflow] if scene.domain.outflow else []
         self.position_stages = [cls(ctx) for cls in outflow + walls_cls.position_stage_classes(scene)

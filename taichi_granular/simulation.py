@@ -15,6 +15,7 @@ from . import runtime
 from .config import Scene
 from .diagnostics import Diagnostics, Guard
 from .output import RunOutput
+from .neighbors import NeighbourListOverflow
 from .physics.implicit_viscosity import ViscousSolveError
 from .profiling import StageProfiler
 
@@ -237,7 +238,7 @@ class Simulation:
             dt = min(self.dt, next_output - self.t, end_time - self.t)
             try:
                 self.scheme.step(dt, self.t)
-            except ViscousSolveError as error:
+            except (ViscousSolveError, NeighbourListOverflow) as error:
                 raise SimulationError(self._write_failure(
                     f"step {self.step_count + 1}, t = {self.t:.6g} s, dt = {dt:.3g} s: {error}")) from None
             self.step_count += 1

@@ -166,6 +166,32 @@ def test_implicit_and_explicit_agree_for_a_small_time_step():
     assert runs["implicit"].scheme.viscous_solve.run_iterations == 0
 
 
+def test_picard_iterations_converge_on_the_viscosity():
+    """A 4 cm column released at rest, one step at the implicit (acoustic) step with five Picard
+    solves: each re-evaluates the strain rate, pressure and viscosity at the mid-step velocity and
+    solves again; the changes they make shrink (a fixed point of eta(v)), and the second solve's
+    change is already small beside the first solve's own viscous change."""
+    data = layer(height=0.04, length=0.04, dp=DP, end_time=0.02)
+    data["domain"] = {"lower": [-0.1, -0.02], "upper": [0.1, 0.06], "periodic": []}
+    data["particles"][0].update(lower=[-0.02, 0.0], upper=[0.02, 0.04], initial_stress="hydrostatic")
+    data["numerics"].update(viscosity="implicit", viscous_picard_iterations=5, viscous_tolerance=1e-10)
+    sim = Simulation(build(data))
+    solve = sim.scheme.viscous_solve
+    assert [stage.name for stage in solve.refresh] == ["strain_rate", "grain_density_pressure",
+                                                       "regularised_viscosity"]
+    sim.scheme.prepare()
+    t = 0.0
+    for _ in range(3):
+        dt = sim.scheme.stable_time_step()
+        sim.scheme.step(dt, t)
+        t += dt
+        changes = solve.last_changes
+        assert len(changes) == 4 and changes[0] > 0.0, changes  # the re-evaluation did something
+        assert all(later < 0.5 * earlier for earlier, later in zip(changes, changes[1:])), changes
+    stats = solve.take_statistics()
+    assert 0.0 < stats["viscous_picard_change"] < 0.2, stats
+
+
 def test_a_solve_that_does_not_converge_stops_the_run():
     data = layer(height=0.04, length=0.04, dp=DP, end_time=0.01)
     data["numerics"].update(viscosity="implicit", viscous_max_iterations=1, viscous_tolerance=1e-14)

@@ -18,11 +18,13 @@ def brute_force(points, lower, upper, periodic, support):
     return (r < support) & ~np.eye(len(points), dtype=bool)
 
 
-def grid_neighbours(points, lower, upper, periodic, support, n_moving=None, material_only=False):
+def grid_neighbours(points, lower, upper, periodic, support, n_moving=None, material_only=False, grid=None,
+                    **list_options):
     n, dim = points.shape
-    x = ti.Vector.field(dim, float, n)
-    x.from_numpy(points)
-    grid = NeighborGrid(x, lower, upper, periodic, support, n_moving=n_moving)
+    if grid is None:
+        x = ti.Vector.field(dim, float, n)
+        grid = NeighborGrid(x, lower, upper, periodic, support, n_moving=n_moving, **list_options)
+    grid.position.from_numpy(points)
     count = ti.field(ti.i32, n)
     id_sum = ti.field(ti.i64, n)
     order_hash = ti.field(ti.i64, n)
@@ -49,6 +51,8 @@ def grid_neighbours(points, lower, upper, periodic, support, n_moving=None, mate
 
     grid.build()
     Probe().run()
+    if list_options or grid.verlet:
+        return count.to_numpy(), id_sum.to_numpy(), order_hash.to_numpy(), grid
     return count.to_numpy(), id_sum.to_numpy(), order_hash.to_numpy()
 
 
@@ -100,6 +104,54 @@ def test_fixed_particles_binned_apart(dim, periodic):
     np.testing.assert_array_equal(count, mask[:, :n_moving].sum(axis=1))
     expected = np.array([np.sum(np.nonzero(row[:n_moving])[0].astype(np.int64) ** 2) for row in mask])
     np.testing.assert_array_equal(id_sum, expected)
+
+
+@pytest.mark.parametrize("dim,periodic", [CASES[0], CASES[2], CASES[4]])
+def test_verlet_list_finds_the_cell_scan_neighbours(dim, periodic):
+    """With a skin: the material's rows give the brute-force sets in a reproducible order,
+    the walls' rows their material neighbours; after moves shorter than half the skin the list is
+    not rebuilt and still gives the exact sets at the new positions; a longer move rebuilds it."""
+    rng = np.random.default_rng(11 + dim)
+    lower = np.zeros(dim)
+    upper = np.array([0.31, 0.2, 0.17][:dim])
+    support, skin = 0.045, 0.01  # 3 cells of support + skin across the 0.17 m axis
+    n, n_moving = 1200, 700
+    points = lower + rng.random((n, dim)) * (upper - lower)
+    options = dict(skin=skin, capacity=600)
+    scan = grid_neighbours(points, lower, upper, periodic, support, n_moving=n_moving)
+    count, id_sum, order, grid = grid_neighbours(points, lower, upper, periodic, support, n_moving=n_moving,
+                                                 **options)
+    for a, b in zip(scan[:2], (count, id_sum)):  # material rows: the same sets
+        np.testing.assert_array_equal(a[:n_moving], b[:n_moving])
+    # in the same order on an independent build (its cells are support + skin wide: its own scan order)
+    again = grid_neighbours(points, lower, upper, periodic, support, n_moving=n_moving, **options)
+    np.testing.assert_array_equal(order, again[2])
+    material = grid_neighbours(points, lower, upper, periodic, support, n_moving=n_moving, material_only=True)
+    listed = grid_neighbours(points, lower, upper, periodic, support, material_only=True, grid=grid)
+    for a, b in zip(material[:2], listed[:2]):  # every row, material neighbours only
+        np.testing.assert_array_equal(a, b)
+    assert grid.rebuilds == 1
+    moved = points.copy()
+    step = rng.normal(size=(n_moving, dim))
+    moved[:n_moving] += 0.49 * skin * step / np.linalg.norm(step, axis=1, keepdims=True)
+    moved[:n_moving] = np.clip(moved[:n_moving], lower, upper - 1e-9)
+    count, id_sum, _, _ = grid_neighbours(moved, lower, upper, periodic, support, grid=grid)
+    assert grid.rebuilds == 1  # within half the skin: the old rows still hold every pair
+    mask = brute_force(moved, lower, upper, periodic, support)
+    np.testing.assert_array_equal(count[:n_moving], mask[:n_moving].sum(axis=1))
+    expected = np.array([np.sum(np.nonzero(row)[0].astype(np.int64) ** 2) for row in mask[:n_moving]])
+    np.testing.assert_array_equal(id_sum[:n_moving], expected)
+    moved[0] = points[0] + 0.51 * skin * np.eye(dim)[1]
+    grid_neighbours(moved, lower, upper, periodic, support, grid=grid)
+    assert grid.rebuilds == 2
+
+
+def test_verlet_list_overflow_names_the_particle():
+    from taichi_granular.neighbors import NeighbourListOverflow
+
+    points = np.full((30, 2), 0.1) + np.linspace(0.0, 1e-3, 30)[:, None]  # a clump
+    with pytest.raises(NeighbourListOverflow, match=r"particle \d+ has 29 particles .* more than the 10"):
+        grid_neighbours(points, (0.0, 0.0), (0.3, 0.2), (False, False), 0.05, skin=0.01, capacity=10)
 
 
 def test_rebuild_moves_only_the_material():
