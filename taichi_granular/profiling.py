@@ -63,6 +63,8 @@ def compiled_kernels() -> List[str]:
     compiles a kernel at its first launch): what a scene's step actually built, so that a test
     or ``run --profile`` can show that an effect switched off was never compiled."""
     from taichi.lang import impl
+
+    from .physics.stage import FUSED_COMPILED
     return sorted({f"{k.func.__module__}.{k.func.__qualname__}"
                    for k in impl.get_runtime().kernels if k.compiled_kernels and
-                   k.func.__module__.startswith("taichi_granular")})
+                   k.func.__module__.startswith("taichi_granular")} | FUSED_COMPILED)

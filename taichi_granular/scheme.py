@@ -20,7 +20,7 @@ from .physics.implicit_viscosity import ImplicitViscosity
 from .physics.outflow import Outflow
 from .physics.rheology import MODELS
 from .physics.shifting import FreeSurface, ParticleShifting
-from .physics.stage import Context
+from .physics.stage import Context, fuse_pair_stages
 from .physics.walls import BOUNDARIES, NoWalls
 from .profiling import StageProfiler
 from .scene import InitialParticles, build_initial
@@ -64,7 +64,8 @@ def rate_stage_classes(scene: Scene, model) -> List[type]:
 class Scheme:
     """State, neighbour grid, smoothing function, boundary and material models, and stages."""
 
-    def __init__(self, scene: Scene, profiler: StageProfiler = None, initial: InitialParticles = None):
+    def __init__(self, scene: Scene, profiler: StageProfiler = None, initial: InitialParticles = None,
+                 fuse: bool = True):
         self.scene = scene
         self.profiler = profiler or StageProfiler(False)
         model = MODELS[scene.material.model].from_scene(scene)
@@ -103,6 +104,8 @@ class Scheme:
                       step_fraction=self.step_fraction)
         ctx.gradient = self.gradient = gradient_cls(ctx)
         self.rate_stages = [cls(ctx) for cls in rate_classes]
+        # as run: consecutive pair stages share one neighbour pass (physics/stage.py FusedPairs)
+        self.rate_passes = fuse_pair_stages(self.rate_stages, ctx) if fuse else list(self.rate_stages)
         self.integrator = integrator_cls(ctx)
         self.viscous_solve = None  # physics/implicit_viscosity.py, between the kick and the drift
         if scene.implicit_viscosity:
@@ -120,7 +123,7 @@ class Scheme:
     # ---- stepping -----------------------------------------------------------------------------
 
     def evaluate_rates(self) -> None:
-        for stage in self.rate_stages:
+        for stage in self.rate_passes:
             self.profiler(stage)
 
     def solve_viscosity(self) -> None:
@@ -164,7 +167,7 @@ class Scheme:
 
     def stage_list(self) -> List[str]:
         """The stages of one time step, in order, as the integrator runs them."""
-        rates = [s.describe() for s in self.rate_stages]
+        rates = [s.describe() for s in self.rate_passes]
         moves = [s.describe() for s in self.position_stages]
         integ = self.integrator
         final = [f"{integ.name}: kick [integration]"] + \

@@ -68,10 +68,11 @@ def test_a_mu_i_step_compiles_no_other_model_and_no_switched_off_effect(tmp_path
 def test_artificial_viscosity_is_in_the_step_and_profile_only_when_on(alpha):
     sim = Simulation(build(layer(height=0.02, length=0.04, alpha=alpha, end_time=1e-3)), profile=True)
     sim.run(max_steps=3)
-    in_list = any(line.startswith("artificial_viscosity") for line in sim.scheme.stage_list())
-    in_profile = "artificial_viscosity" in sim.profiler.seconds
+    # a pass may carry several pair stages ("momentum_stress + artificial_viscosity + ...")
+    in_list = any("artificial_viscosity" in line.split(" [")[0] for line in sim.scheme.stage_list())
+    in_profile = any("artificial_viscosity" in name for name in sim.profiler.seconds)
     assert in_list == in_profile == (alpha > 0.0)
-    assert sim.profiler.calls["momentum_stress"] > 0
+    assert sum(calls for name, calls in sim.profiler.calls.items() if "momentum_stress" in name) > 0
 
 
 @pytest.mark.parametrize("key, value, words", [

@@ -19,23 +19,26 @@ GLASS_BEADS = {
 }
 
 
-def block_scene(n_particles: int, arch: str, precision: str, dp: float = 0.005):
+def block_scene(n_particles: int, arch: str, precision: str, dp: float = 0.005, skin=None):
     side = math.sqrt(n_particles) * dp
+    numerics = {"particle_spacing": dp, "artificial_viscosity": {"alpha": 0.05}}
+    if skin is not None:
+        numerics["neighbour_skin"] = skin
     return scene_from_dict({
         "name": f"bench_{n_particles}", "dimension": 2, "arch": arch, "precision": precision,
         "domain": {"lower": [0.0, -0.02], "upper": [side, 1.5 * side], "periodic": ["x"]},
         "material": dict(GLASS_BEADS),
         "particles": [{"lower": [0.0, 0.0], "upper": [side, side]}],
         "walls": [{"type": "ghost", "point": [0.0, 0.0], "normal": [0.0, 1.0]}],
-        "numerics": {"particle_spacing": dp, "artificial_viscosity": {"alpha": 0.05}},
+        "numerics": numerics,
         "run": {"end_time": 1.0, "output_interval": 1.0},
     })
 
 
-def measure(n_particles: int, steps: int, arch: str, precision: str) -> dict:
+def measure(n_particles: int, steps: int, arch: str, precision: str, skin=None) -> dict:
     from ..simulation import Simulation
 
-    scene = block_scene(n_particles, arch, precision)
+    scene = block_scene(n_particles, arch, precision, skin=skin)
     sim = Simulation(scene, progress=False)
     sim.run(max_steps=5)  # compile and warm up
     import taichi as ti
@@ -52,22 +55,27 @@ def measure(n_particles: int, steps: int, arch: str, precision: str) -> dict:
     sim.profiler.reset()
     sim.run(max_steps=sim.step_count + max(5, steps // 5))
     shares = sim.profiler.by_category()
+    grid = sim.scheme.grid
     total = sum(shares.values()) or 1.0
     return {"particles": n, "walls": sim.state.n_wall, "steps": done,
             "particle_steps_per_second": n * done / wall, "ms_per_step": 1e3 * wall / done,
             "seconds_per_simulated_second": wall / simulated if simulated > 0 else float("nan"),
             "memory_mib": sim.scheme.memory_bytes() / 2**20,
+            "skin": scene.numerics.neighbour_skin, "list_builds": grid.rebuilds / max(grid.builds, 1),
             "shares": {k: v / total for k, v in shares.items() if v > 0}}
 
 
 def main(args) -> int:
     runtime.init(args.arch, args.precision)
     print(f"mu(I) full step, 2D, {args.arch}/{args.precision}, dp = 5 mm, h/dp = 1.3, {args.steps} timed steps")
-    print(f"{'particles':>10} {'walls':>7} {'Mparticle-steps/s':>18} {'ms/step':>9} {'s per sim s':>12} {'MiB':>7}  breakdown")
+    print(f"{'particles':>10} {'walls':>7} {'skin/h':>6} {'Mparticle-steps/s':>18} {'ms/step':>9} {'s per sim s':>12} "
+          f"{'MiB':>7} {'rebuilt':>7}  breakdown")
     for size in args.sizes:
-        r = measure(size, args.steps, args.arch, args.precision)
-        breakdown = " ".join(f"{k} {100 * v:.0f}%" for k, v in sorted(r["shares"].items(), key=lambda kv: -kv[1]))
-        print(f"{r['particles']:>10} {r['walls']:>7} {r['particle_steps_per_second'] / 1e6:>18.3f} "
-              f"{r['ms_per_step']:>9.2f} {r['seconds_per_simulated_second']:>12.1f} {r['memory_mib']:>7.1f}  {breakdown}",
-              flush=True)
+        for skin in getattr(args, "skins", None) or [None]:
+            r = measure(size, args.steps, args.arch, args.precision, skin)
+            breakdown = " ".join(f"{k} {100 * v:.0f}%" for k, v in sorted(r["shares"].items(), key=lambda kv: -kv[1]))
+            rebuilt = f"{100 * r['list_builds']:.0f}%" if r["skin"] > 0 else "-"
+            print(f"{r['particles']:>10} {r['walls']:>7} {r['skin']:>6.2f} {r['particle_steps_per_second'] / 1e6:>18.3f} "
+                  f"{r['ms_per_step']:>9.2f} {r['seconds_per_simulated_second']:>12.1f} {r['memory_mib']:>7.1f} "
+                  f"{rebuilt:>7}  {breakdown}", flush=True)
     return 0

@@ -7,16 +7,16 @@ dv_i/dt -= sum_j m_j Pi_ij grad_i W_ij.
 """
 import taichi as ti
 
-from .. import runtime
-
-from .stage import Stage
+from .stage import PairStage
 
 
 @ti.data_oriented
-class ArtificialViscosity(Stage):
+class ArtificialViscosity(PairStage):
     name = "artificial_viscosity"
     category = "forces"
     equation = "[M38]"
+    reads = ("gradient_correction",)
+    writes = ("acceleration",)  # added to the momentum stage's (its store runs after that one)
 
     def __init__(self, ctx):
         super().__init__(ctx)
@@ -37,10 +37,10 @@ class ArtificialViscosity(Stage):
             Pi = (-self.alpha * c_ij * phi + self.beta * phi * phi) / rho_ij
             acc -= self.state.mass[j] * Pi * self.gradient.pairwise(i, j, x_ij, r)
 
-    @ti.kernel
-    def _run(self):
-        ti.loop_config(serialize=runtime.serial_loops)
-        for i in range(self.state.n_material):
-            acc = ti.Vector.zero(float, self.state.dim)
-            self.grid.for_each_neighbor(i, self.pair, acc)
-            self.state.acceleration[i] += acc
+    @ti.func
+    def initial(self, i):
+        return ti.Vector.zero(float, self.state.dim)
+
+    @ti.func
+    def store(self, i, acc):
+        self.state.acceleration[i] += acc

@@ -23,16 +23,16 @@ pressure error grows ~1 %/s (measured).
 """
 import taichi as ti
 
-from .. import runtime
-
-from .stage import Stage
+from .stage import PairStage
 
 
 @ti.data_oriented
-class Continuity(Stage):
+class Continuity(PairStage):
     name = "continuity"
     category = "density"
     equation = "[M26]"
+    reads = ("gradient_correction",)
+    writes = ("density_rate",)
 
     def __init__(self, ctx):
         super().__init__(ctx)
@@ -56,10 +56,10 @@ class Continuity(Stage):
                 rate += self.diffusion * self.h * self.c0 * 2.0 * (s.density[j] - s.density[i] - hydrostatic) * \
                     (-x_ij).dot(self.smoothing.gradient(x_ij, r)) / (r * r + self.eps2) * s.mass[j] / s.density[j]
 
-    @ti.kernel
-    def _run(self):
-        ti.loop_config(serialize=runtime.serial_loops)
-        for i in range(self.state.n_material):
-            rate = 0.0
-            self.grid.for_each_neighbor(i, self.pair, rate)
-            self.state.density_rate[i] = rate
+    @ti.func
+    def initial(self, i):
+        return 0.0
+
+    @ti.func
+    def store(self, i, rate):
+        self.state.density_rate[i] = rate

@@ -23,10 +23,8 @@ Without correction both are the plain grad_i W_ij and no field is allocated.
 """
 import taichi as ti
 
-from .. import runtime
-
 from ..state import FieldSpec
-from .stage import Stage
+from .stage import PairStage
 
 
 @ti.data_oriented
@@ -88,13 +86,14 @@ class CorrectedGradient(PlainGradient):
 
 
 @ti.data_oriented
-class GradientCorrection(Stage):
+class GradientCorrection(PairStage):
     """Computes L_i for every material particle (positions and densities only)."""
 
     name = "gradient_correction"
     category = "neighbours"
     equation = "renormalisation [P]"
     fields = CorrectedGradient.fields
+    writes = ("gradient_correction",)
 
     def __init__(self, ctx):
         super().__init__(ctx)
@@ -108,19 +107,19 @@ class GradientCorrection(Stage):
         volume_j = self.state.mass[j] / self.state.density[k]
         moment -= volume_j * x_ij.outer_product(self.smoothing.gradient(x_ij, r))  # (x_j - x_i) (x) grad W
 
-    @ti.kernel
-    def _run(self):
-        ti.loop_config(serialize=runtime.serial_loops)
-        for i in range(self.state.n_material):
-            moment = ti.Matrix.zero(float, self.dim, self.dim)
-            self.grid.for_each_neighbor(i, self.pair, moment)
-            L = ti.Matrix.identity(float, self.dim)
-            if moment.determinant() > self.min_determinant:
-                if ti.static(self.scalar):
-                    L = (self.dim / moment.trace()) * ti.Matrix.identity(float, self.dim)
-                else:
-                    L = moment.inverse()
-            self.state.gradient_correction[i] = L
+    @ti.func
+    def initial(self, i):
+        return ti.Matrix.zero(float, self.dim, self.dim)
+
+    @ti.func
+    def store(self, i, moment):
+        L = ti.Matrix.identity(float, self.dim)
+        if moment.determinant() > self.min_determinant:
+            if ti.static(self.scalar):
+                L = (self.dim / moment.trace()) * ti.Matrix.identity(float, self.dim)
+            else:
+                L = moment.inverse()
+        self.state.gradient_correction[i] = L
 
 
 GRADIENTS = {"none": PlainGradient, "scalar": CorrectedGradient, "matrix": CorrectedGradient}

@@ -40,13 +40,15 @@ import taichi as ti
 
 from .. import runtime
 
-from .stage import Stage
+from .stage import PairStage
 from .strain_rate import velocity_gradient_term
 
 
 @ti.data_oriented
-class _Momentum(Stage):
+class _Momentum(PairStage):
     category = "forces"
+    reads = ("gradient_correction", "velocity_gradient", "strain_rate")
+    writes = ("acceleration",)
 
     def __init__(self, ctx):
         super().__init__(ctx)
@@ -109,13 +111,13 @@ class _Momentum(Stage):
         return s.mass[j] * 2.0 * (self.dim + 2) * self.pair_viscosity(i, k, part) * v_ij.dot(x_ij) / (
             s.density[i] * s.density[k] * (r * r + self.eps2))
 
-    @ti.kernel
-    def _run(self):
-        ti.loop_config(serialize=runtime.serial_loops)
-        for i in range(self.state.n_material):
-            acc = self.gravity[None]
-            self.grid.for_each_neighbor(i, self.pair, acc)
-            self.state.acceleration[i] = acc
+    @ti.func
+    def initial(self, i):
+        return self.gravity[None]
+
+    @ti.func
+    def store(self, i, acc):
+        self.state.acceleration[i] = acc
 
     # ---- the viscous operator of the implicit update ------------------------------------------
 

@@ -34,20 +34,20 @@ with the cap the column runs to rest, its fastest grain at 0.97 m/s.
 """
 import taichi as ti
 
-from .. import runtime
-
 from ..state import FieldSpec
-from .stage import Stage
+from .stage import PairStage
 
 ANTI_CLUMPING = 0.2  # R of Monaghan (2000)
 ANTI_CLUMPING_POWER = 4  # n of Monaghan (2000)
 
 
 @ti.data_oriented
-class ParticleShifting(Stage):
+class ParticleShifting(PairStage):
     name = "particle_shifting"
     category = "integration"
     equation = "Lind et al. (2012)"
+    reads = ("kernel_sum",)
+    writes = ("shift_velocity",)
     fields = (FieldSpec("shift_velocity", "vector", "particle shifting velocity -zeta h c grad C", "m/s",
                         "material"),)
 
@@ -78,35 +78,35 @@ class ParticleShifting(Stage):
             acc[1, a] -= surface * x_ij[a]
             acc[2, a] += volume * grad[a]
 
-    @ti.kernel
-    def _run(self):
+    @ti.func
+    def initial(self, i):
+        return ti.Matrix.zero(float, 3, self.dim)
+
+    @ti.func
+    def store(self, i, acc):
         """Kernel sums come from the FreeSurface stage, earlier in the step."""
         s = self.state
-        ti.loop_config(serialize=runtime.serial_loops)
-        for i in range(s.n_material):
-            acc = ti.Matrix.zero(float, 3, self.dim)
-            self.grid.for_each_neighbor(i, self.pair, acc)
-            scale = -self.coefficient * self.h * self.model.sound_speed(i)
-            shift = ti.Vector.zero(float, self.dim)
-            towards_surface = ti.Vector.zero(float, self.dim)
-            kernel_sum_gradient = ti.Vector.zero(float, self.dim)
-            for a in ti.static(range(self.dim)):
-                shift[a] = scale * acc[0, a]
-                towards_surface[a] = acc[1, a]
-                kernel_sum_gradient[a] = acc[2, a]
-            # the surface normal: on the surface along the kernel-sum gradient, below it towards
-            # the surface neighbours
-            normal = towards_surface
-            if s.kernel_sum[i] < self.threshold:
-                normal = kernel_sum_gradient
-            if normal.norm() > 0.0:
-                n = normal.normalized()
-                shift -= shift.dot(n) * n
-            s.shift_velocity[i] = shift
+        scale = -self.coefficient * self.h * self.model.sound_speed(i)
+        shift = ti.Vector.zero(float, self.dim)
+        towards_surface = ti.Vector.zero(float, self.dim)
+        kernel_sum_gradient = ti.Vector.zero(float, self.dim)
+        for a in ti.static(range(self.dim)):
+            shift[a] = scale * acc[0, a]
+            towards_surface[a] = acc[1, a]
+            kernel_sum_gradient[a] = acc[2, a]
+        # the surface normal: on the surface along the kernel-sum gradient, below it towards
+        # the surface neighbours
+        normal = towards_surface
+        if s.kernel_sum[i] < self.threshold:
+            normal = kernel_sum_gradient
+        if normal.norm() > 0.0:
+            n = normal.normalized()
+            shift -= shift.dot(n) * n
+        s.shift_velocity[i] = shift
 
 
 @ti.data_oriented
-class FreeSurface(Stage):
+class FreeSurface(PairStage):
     """Kernel (Shepard) sum S_i = sum_j V_j W_ij, self and boundary particles included [-].
     S_i falls from ~1 in the bulk to ~0.8 on a free surface (0.79 for the top row of a
     lattice at h/dp = 1.3 with Wendland C2, 1.006 one row below); particles below
@@ -115,6 +115,7 @@ class FreeSurface(Stage):
     name = "free_surface"
     category = "neighbours"
     equation = "Shepard sum"
+    writes = ("kernel_sum",)
     fields = (FieldSpec("kernel_sum", "scalar", "Shepard sum S_i = sum_j V_j W_ij; free surface below the "
                         "threshold", "-", "material"),)
 
@@ -123,11 +124,10 @@ class FreeSurface(Stage):
         s = self.state
         acc += s.mass[j] / s.density[self.walls.state_index(i, j)] * self.smoothing.value(r)
 
-    @ti.kernel
-    def _run(self):
-        s = self.state
-        ti.loop_config(serialize=runtime.serial_loops)
-        for i in range(s.n_material):
-            total = s.mass[i] / s.density[i] * self.smoothing.value(0.0)
-            self.grid.for_each_neighbor(i, self.pair, total)
-            s.kernel_sum[i] = total
+    @ti.func
+    def initial(self, i):
+        return self.state.mass[i] / self.state.density[i] * self.smoothing.value(0.0)
+
+    @ti.func
+    def store(self, i, total):
+        self.state.kernel_sum[i] = total

@@ -1,7 +1,11 @@
-"""The Stage: one kernel launch of one physics step, named for the stage list and profile."""
+"""The Stage: one kernel launch of one physics step, named for the stage list and profile; pair
+stages, and several of them fused into one neighbour pass."""
 from dataclasses import dataclass
 from typing import Any, Tuple
 
+import taichi as ti
+
+from .. import runtime
 from ..state import FieldSpec
 
 # The categories of the per-stage profile, in the order a step runs them.
@@ -45,3 +49,111 @@ class Stage:
     def describe(self) -> str:
         eq = f" {self.equation}" if self.equation else ""
         return f"{self.name} [{self.category}]{eq}"
+
+
+class PairStage(Stage):
+    """A stage that is one sum over each material particle's neighbours:
+    ``acc = initial(i)``, ``pair(i, j, x_ij, r, acc)`` for every neighbour, ``store(i, acc)``.
+
+    Consecutive pair stages share one neighbour pass (:class:`FusedPairs`, built by the scheme)
+    unless one of them reads, in its pair term, a field that an earlier one stores: ``writes``
+    names what ``store`` writes, ``reads`` the fields the pair term takes that some pair stage
+    writes (kernel corrections, kernel sums, velocity gradients, ...). The stores run in stage
+    order after the shared loop, so a store may build on an earlier one (+= on the acceleration).
+    """
+
+    reads: Tuple[str, ...] = ()
+    writes: Tuple[str, ...] = ()
+
+    @ti.kernel
+    def _run(self):
+        ti.loop_config(serialize=runtime.serial_loops)
+        for i in range(self.state.n_material):
+            acc = self.initial(i)
+            self.grid.for_each_neighbor(i, self.pair, acc)
+            self.store(i, acc)
+
+
+def fuse_pair_stages(stages: list, ctx) -> list:
+    """The stages as run: runs of consecutive pair stages that do not read what an earlier one of
+    the run writes become one :class:`FusedPairs` (up to ``FusedPairs.most``); the rest as they are."""
+    passes, group = [], []
+
+    def flush():
+        if len(group) > 1:
+            passes.append(FusedPairs(ctx, list(group)))
+        elif group:
+            passes.append(group[0])
+        group.clear()
+
+    for stage in stages:
+        if not isinstance(stage, PairStage):
+            flush()
+            passes.append(stage)
+            continue
+        written = {name for member in group for name in member.writes}
+        if set(stage.reads) & written or len(group) == FusedPairs.most:
+            flush()
+        group.append(stage)
+    flush()
+    return passes
+
+
+# 'module.Class.pair' of every pair stage compiled into a fused pass so far (profiling.compiled_kernels:
+# the kernel itself is FusedPairs._run whatever its members)
+FUSED_COMPILED = set()
+
+
+@ti.data_oriented
+class FusedPairs(Stage):
+    """Several pair stages in one neighbour pass: each pair term adds to its own accumulator
+    (chosen at compile time, no branching on the stage), then each stage stores its own."""
+
+    most = 4
+
+    def __init__(self, ctx, members):
+        super().__init__(ctx)
+        self.members = tuple(members)
+        self.name = " + ".join(m.name for m in members)
+        self.category = members[0].category
+        self.equation = " ".join(m.equation for m in members if m.equation)
+
+    def run(self) -> None:
+        FUSED_COMPILED.update(f"{type(m).__module__}.{type(m).__qualname__}.pair" for m in self.members)
+        self._run()
+
+    @ti.func
+    def pair(self, i, j, x_ij, r, accs: ti.template()):
+        for k in ti.static(range(len(self.members))):
+            self.members[k].pair(i, j, x_ij, r, accs[k])
+
+    @ti.kernel
+    def _run(self):
+        # a Python tuple of Taichi locals cannot be built in a loop: one branch per arity
+        m = self.members
+        ti.loop_config(serialize=runtime.serial_loops)
+        for i in range(self.state.n_material):
+            if ti.static(len(m) == 2):
+                a0 = m[0].initial(i)
+                a1 = m[1].initial(i)
+                self.grid.for_each_neighbor(i, self.pair, ti.static((a0, a1)))
+                m[0].store(i, a0)
+                m[1].store(i, a1)
+            elif ti.static(len(m) == 3):
+                a0 = m[0].initial(i)
+                a1 = m[1].initial(i)
+                a2 = m[2].initial(i)
+                self.grid.for_each_neighbor(i, self.pair, ti.static((a0, a1, a2)))
+                m[0].store(i, a0)
+                m[1].store(i, a1)
+                m[2].store(i, a2)
+            else:
+                a0 = m[0].initial(i)
+                a1 = m[1].initial(i)
+                a2 = m[2].initial(i)
+                a3 = m[3].initial(i)
+                self.grid.for_each_neighbor(i, self.pair, ti.static((a0, a1, a2, a3)))
+                m[0].store(i, a0)
+                m[1].store(i, a1)
+                m[2].store(i, a2)
+                m[3].store(i, a3)

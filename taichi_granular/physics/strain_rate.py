@@ -6,10 +6,8 @@ gamma_dot = sqrt(2 eps:eps) (= |dv_x/dz| in simple shear)  [1/s].
 """
 import taichi as ti
 
-from .. import runtime
-
 from ..state import FieldSpec
-from .stage import Stage
+from .stage import PairStage
 
 
 @ti.func
@@ -36,7 +34,7 @@ def velocity_gradient_term(stage: ti.template(), velocity: ti.template(), i, j, 
 
 
 @ti.data_oriented
-class StrainRate(Stage):
+class StrainRate(PairStage):
     name = "strain_rate"
     category = "rheology"
     equation = "[M31]"
@@ -44,6 +42,8 @@ class StrainRate(Stage):
                         "material"),
               FieldSpec("velocity_gradient", "matrix", "grad v, component ab = d v_a/d x_b [M31]", "1/s",
                         "material"))
+    reads = ("gradient_correction",)
+    writes = ("velocity_gradient", "strain_rate")
 
     def __init__(self, ctx):
         super().__init__(ctx)
@@ -53,11 +53,11 @@ class StrainRate(Stage):
     def pair(self, i, j, x_ij, r, gradient: ti.template()):
         velocity_gradient_term(self, self.state.velocity, i, j, x_ij, r, gradient)  # [M31]
 
-    @ti.kernel
-    def _run(self):
-        ti.loop_config(serialize=runtime.serial_loops)
-        for i in range(self.state.n_material):
-            gradient = ti.Matrix.zero(float, self.dim, self.dim)
-            self.grid.for_each_neighbor(i, self.pair, gradient)
-            self.state.velocity_gradient[i] = gradient
-            self.state.strain_rate[i] = strain_rate_modulus(gradient)
+    @ti.func
+    def initial(self, i):
+        return ti.Matrix.zero(float, self.dim, self.dim)
+
+    @ti.func
+    def store(self, i, gradient):
+        self.state.velocity_gradient[i] = gradient
+        self.state.strain_rate[i] = strain_rate_modulus(gradient)

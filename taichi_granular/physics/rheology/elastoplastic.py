@@ -185,7 +185,8 @@ class ElastoplasticMohrCoulomb:
         from ..strain_rate import StrainRate
         from ..stress_diffusion import StressDiffusion
         diffusion = [StressDiffusion] if scene.numerics.stress_diffusion > 0.0 else []
-        return [Continuity, LinearPressure, StrainRate, JaumannStressRate] + diffusion + \
+        # the strain rate does not need the pressure: before it, so that it shares continuity's pass
+        return [Continuity, StrainRate, LinearPressure, JaumannStressRate] + diffusion + \
             [MOMENTUM["stress_divergence"]]
 
     def update_stage_classes(self):

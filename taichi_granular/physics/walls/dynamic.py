@@ -39,7 +39,7 @@ import taichi as ti
 from ... import runtime
 
 from ...state import FieldSpec
-from ..stage import Stage
+from ..stage import PairStage, Stage
 from .ghost import NoWalls
 
 
@@ -111,7 +111,7 @@ class WallContinuity(Stage):
 
 
 @ti.data_oriented
-class WallFriction(Stage):
+class WallFriction(PairStage):
     """Coulomb friction between material and dynamic boundaries (module docstring). For
     material particle i, F = the force per unit mass its boundary neighbours exert through the
     momentum equation (and artificial viscosity, when on); its normal n is the direction of
@@ -121,6 +121,8 @@ class WallFriction(Stage):
 
     name = "wall_friction"
     category = "walls"
+    reads = ("gradient_correction", "velocity_gradient", "strain_rate")  # the momentum pair's
+    writes = ("acceleration",)
     equation = "Coulomb |f_t| <= tan(delta) |f_n|"
     fields = (FieldSpec("wall_friction", "scalar", "tan(delta), Coulomb friction coefficient with the material "
                         "(-1: none, a rough wall)", "-", "wall"),)
@@ -155,25 +157,27 @@ class WallFriction(Stage):
                     self.viscosity.pair(i, j, x_ij, r, total)
                 acc[2, :] += total
 
-    @ti.kernel
-    def _run(self):
+    @ti.func
+    def initial(self, i):
+        return ti.Matrix.zero(float, 3, self.dim)
+
+    @ti.func
+    def store(self, i, acc):
+        """Replace the tangential wall force of the momentum (and artificial viscosity) stores,
+        which run before this one in the same pass or earlier."""
         dt = self.time_step[None]
-        ti.loop_config(serialize=runtime.serial_loops)
-        for i in range(self.state.n_material):
-            acc = ti.Matrix.zero(float, 3, self.dim)
-            self.grid.for_each_neighbor(i, self.pair, acc)
-            push = ti.Vector([acc[0, a] for a in ti.static(range(self.dim))])
-            push_norm = push.norm()
-            if push_norm > 0.0 and dt > 0.0:
-                normal = push / push_norm
-                weighted = ti.Vector([acc[1, a] for a in ti.static(range(self.dim))])
-                wall_force = ti.Vector([acc[2, a] for a in ti.static(range(self.dim))])
-                normal_force = ti.max(wall_force.dot(normal), 0.0)
-                limit = ti.max(weighted.dot(normal), 0.0) / push_norm * normal_force  # tan(delta) |f_n|
-                a = self.state.acceleration[i] - (wall_force - wall_force.dot(normal) * normal)
-                v_after = self.state.velocity[i] + dt * a
-                v_t = v_after - v_after.dot(normal) * normal
-                speed = v_t.norm()
-                if speed > 0.0:
-                    a -= v_t / speed * ti.min(limit, speed / dt)
-                self.state.acceleration[i] = a
+        push = ti.Vector([acc[0, a] for a in ti.static(range(self.dim))])
+        push_norm = push.norm()
+        if push_norm > 0.0 and dt > 0.0:
+            normal = push / push_norm
+            weighted = ti.Vector([acc[1, a] for a in ti.static(range(self.dim))])
+            wall_force = ti.Vector([acc[2, a] for a in ti.static(range(self.dim))])
+            normal_force = ti.max(wall_force.dot(normal), 0.0)
+            limit = ti.max(weighted.dot(normal), 0.0) / push_norm * normal_force  # tan(delta) |f_n|
+            a = self.state.acceleration[i] - (wall_force - wall_force.dot(normal) * normal)
+            v_after = self.state.velocity[i] + dt * a
+            v_t = v_after - v_after.dot(normal) * normal
+            speed = v_t.norm()
+            if speed > 0.0:
+                a -= v_t / speed * ti.min(limit, speed / dt)
+            self.state.acceleration[i] = a
