@@ -661,8 +661,9 @@ class Numerics:
         "lags by half a step)", 1, bounds="[1, 20]")
     neighbour_skin: float = _key(
         "Verlet-list skin as a fraction of h: each particle's neighbours within 2h + skin are listed and the "
-        "list rebuilt only when a particle has moved more than half the skin (neighbors.py); 0 scans the cells "
-        "in every pair loop", 0.0, "-", bounds="[0, 2]")
+        "list rebuilt only when a particle has moved more than half the skin (neighbors.py; 0.3: 3D coarse collapse "
+        "1.5x, 2D 160k block 1.1-1.4x faster than scanning the cells, measured); 0 scans the cells in every pair "
+        "loop", 0.3, "-", bounds="[0, 2]")
     gradient_correction: Literal["scalar", "matrix", "none"] = _key(
         "kernel gradient renormalisation: full matrix M^-1 (exact for linear fields, also at walls and "
         "free surfaces), scalar d/tr(M), or none", "matrix")

@@ -13,13 +13,13 @@ hands ``task(i, j, x_ij, r, acc)`` the minimum-image displacement x_ij = x_i - x
 
 With a skin (``numerics.neighbour_skin`` > 0, a Verlet list), the cells are at least
 support + skin wide and every build writes each particle's neighbours within support + skin into
-a row of its own, in the cell scan's order; the pair loops then read the row (and keep the pairs
+a row of its own, in ascending id order; the pair loops then read the row (and keep the pairs
 within the support) instead of scanning 3^d cells of which only ~35 % (2D) or ~15 % (3D) of the
 candidates are neighbours. The rows are rebuilt only when some material particle has moved more
 than half the skin since the last build (two particles closing on each other by the whole skin
 is then the most that can have happened), so between rebuilds no pair within the support is
-missed and the sums are those of the cell scan, in the order of the last build (round-off apart,
-tested). A boundary particle's row holds its material neighbours only: the one pair loop over
+missed and the sums are those of the cell scan (round-off apart: ascending ids, not cell by cell;
+tested), whenever the list was built, so a resumed run is bitwise the uninterrupted one. A boundary particle's row holds its material neighbours only: the one pair loop over
 boundary particles, :meth:`for_each_material_neighbor`, needs no more, and a wall particle with
 no material in reach then does no pair work at all.
 """
@@ -73,6 +73,11 @@ class NeighborGrid:
         self.periodic = tuple(bool(p) for p in periodic)
         self.support = float(support)
         self.skin = float(skin)  # [m]; 0: no Verlet list, every pair loop scans the cells
+        # a periodic axis needs 3 cells (the scan must not see an image twice): a narrow periodic box
+        # gets the skin that fits, or none
+        for L, per in zip(self.box, self.periodic):
+            if per and self.support + self.skin > L / 3.0:
+                self.skin = max(0.0, L / 3.0 * (1.0 - 1e-9) - self.support)
         self.reach = self.support + self.skin  # what a cell scan finds [m]
         self.cells = tuple(max(1, int(math.floor(L / self.reach))) for L in self.box)
         for a in range(self.dim):
@@ -213,8 +218,18 @@ class NeighborGrid:
                 self._scan(i, self._append, count, self.lists, self.reach)
             else:
                 self._scan(i, self._append, count, self.material_lists, self.reach)
-            self.neighbour_count[i] = ti.min(count, self.capacity)
+            stored = ti.min(count, self.capacity)
+            self.neighbour_count[i] = stored
             ti.atomic_max(self.longest[None], count)
+            # ascending ids: the sums then do not depend on when the list was built (a resumed run,
+            # whose list is built at the checkpoint, stays bitwise the uninterrupted one)
+            for k in range(1, stored):
+                key = self.neighbour_ids[i, k]
+                m = k - 1
+                while m >= 0 and self.neighbour_ids[i, m] > key:
+                    self.neighbour_ids[i, m + 1] = self.neighbour_ids[i, m]
+                    m -= 1
+                self.neighbour_ids[i, m + 1] = key
             if count > self.capacity:
                 self.longest_particle[None] = i  # one that overflowed (any: the message names one)
         ti.loop_config(serialize=runtime.serial_loops)
