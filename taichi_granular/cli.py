@@ -200,6 +200,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--quick", action="store_true", help="accuracy: the few-minute sweep (never rewrites the README)")
     p.add_argument("--cases", nargs="+", help="accuracy, viscosity: only cases whose name contains one of these")
     p.add_argument("--window", type=float, default=0.01, help="viscosity: simulated seconds timed from release")
+    p.add_argument("--cfls", type=float, nargs="+",
+                   help="viscosity: an ensemble instead, one run to rest per CFL number and setting, of the "
+                        "accuracy study's collapse (a2_75 unless --cases)")
+    p.add_argument("--spacing", type=float, help="viscosity --cfls: particle spacing [m] (default: the study's middle one)")
     p.add_argument("--out",
                    help="accuracy: output folder (default renders/accuracy, quick: output/bench/accuracy_quick)")
     p.add_argument("--timeout", type=float, default=3600.0, help="accuracy: seconds allowed per run")

@@ -37,7 +37,7 @@ import time
 from dataclasses import asdict, dataclass, field, replace
 from functools import lru_cache
 from pathlib import Path
-from typing import Dict, List, Optional, Sequence, Tuple
+from typing import Any, Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
@@ -138,10 +138,20 @@ def _error(case: Case, scene, times, frames, diagnostics) -> Tuple[float, str]:
     return abs(result.error), note
 
 
-def measure(case: Case, overrides: Sequence[str], profile_steps: int = 200) -> dict:
-    """Run ``case`` with ``overrides`` in this process; the row of the CSV."""
-    import resource
+@dataclass
+class CaseRun:
+    """A case run to its end time (a collapse: or to rest), frames at every output time."""
+    scene: Any
+    sim: Any
+    times: List[float]
+    frames: List[dict]
+    diagnostics: List[dict]
+    wall_seconds: float  # stepping only, the first step's share estimated (it compiles)
+    compile_seconds: float
 
+
+def run_case(case: Case, overrides: Sequence[str]) -> CaseRun:
+    """Run ``case`` with ``overrides`` in this process (its runtime initialised by the Simulation)."""
     import taichi as ti
 
     from ..config import load_scene
@@ -176,6 +186,17 @@ def measure(case: Case, overrides: Sequence[str], profile_steps: int = 200) -> d
             break
     steps = sim.step_count
     wall = stepping * steps / max(1, steps - 1)  # the first step's share, timed with the compilation
+    return CaseRun(scene, sim, times, frames, diagnostics, wall, compile_seconds)
+
+
+def measure(case: Case, overrides: Sequence[str], profile_steps: int = 200) -> dict:
+    """Run ``case`` with ``overrides`` in this process; the row of the CSV."""
+    import resource
+
+    done = run_case(case, overrides)
+    scene, sim, times, frames, diagnostics = done.scene, done.sim, done.times, done.frames, done.diagnostics
+    steps, wall, compile_seconds = sim.step_count, done.wall_seconds, done.compile_seconds
+    n = sim.state.n_material
     error, note = _error(case, scene, times, frames, diagnostics)
     sim.profiler.enabled = True
     sim.profiler.reset()
