@@ -68,7 +68,7 @@ def main(args) -> int:
 
 def ensemble_run(case, spacing: float, cfl: float, viscosity: str) -> dict:
     """One collapse of the ensemble, to rest: run-out (% of Lube) at the front stop, its time, the
-    bulk run-out at the end, steps and wall seconds."""
+    run-out (% of Lube) and bulk run-out at the end, steps and wall seconds."""
     from ..validation import column_collapse
     from .accuracy import run_case
 
@@ -76,7 +76,7 @@ def ensemble_run(case, spacing: float, cfl: float, viscosity: str) -> dict:
                            f"numerics.viscosity={viscosity}"))
     result = column_collapse.evaluate(done.scene, done.times, done.frames, done.diagnostics)
     return {"cfl": cfl, "viscosity": viscosity, "runout": 100.0 * result.error, "stop": result.front_stop_time,
-            "bulk": result.bulk_runout_end, "steps": done.sim.step_count, "wall": done.wall_seconds}
+            "end": 100.0 * (result.runout_end / result.runout_reference - 1.0), "bulk": result.bulk_runout_end, "steps": done.sim.step_count, "wall": done.wall_seconds}
 
 
 def _mean_se(values):
@@ -94,7 +94,7 @@ def ensemble(args) -> int:
     for case in cases:
         spacing = args.spacing or case.spacings[case.option_level]
         print(f"{case.label()}, dp {1e3 * spacing:g} mm: run-out % of Lube at the front stop / stop s / "
-              f"bulk run-out at the end, per CFL number")
+              f"run-out % of Lube / bulk run-out at the end, per CFL number")
         rows = {}
         for viscosity in ("explicit", "implicit"):
             rows[viscosity] = []
@@ -102,16 +102,18 @@ def ensemble(args) -> int:
                 r = ensemble_run(case, spacing, cfl, viscosity)
                 rows[viscosity].append(r)
                 stop = "none" if r["stop"] is None else f"{r['stop']:.2f}"
-                print(f"  {viscosity:<8} cfl {cfl:<5g} {r['runout']:+6.1f} / {stop} / {r['bulk']:.3f}   "
+                print(f"  {viscosity:<8} cfl {cfl:<5g} {r['runout']:+6.1f} / {stop} / {r['end']:+6.1f} / {r['bulk']:.3f}   "
                       f"{r['steps']} steps, {r['wall']:.0f} s", flush=True)
         summary = {}
         for viscosity, rr in rows.items():
-            runout, stop, bulk = (_mean_se([r[k] for r in rr]) for k in ("runout", "stop", "bulk"))
-            summary[viscosity] = runout, stop
+            runout, stop, end, bulk = (_mean_se([r[k] for r in rr]) for k in ("runout", "stop", "end", "bulk"))
+            summary[viscosity] = runout, stop, end
             print(f"  {viscosity:<8} mean run-out {runout[0]:+.2f} % (se {runout[1]:.2f}), front stop "
-                  f"{stop[0]:.3f} s (se {stop[1]:.3f}), bulk {bulk[0]:.3f}")
-        (re, rse), (se_, sse) = summary["explicit"]
-        (ri, rise), (si, sise) = summary["implicit"]
+                  f"{stop[0]:.3f} s (se {stop[1]:.3f}), at the end {end[0]:+.2f} % (se {end[1]:.2f}), "
+                  f"bulk {bulk[0]:.3f} (se {bulk[1]:.3f})")
+        (re, rse), (se_, sse), (ee, ese) = summary["explicit"]
+        (ri, rise), (si, sise), (ei, eise) = summary["implicit"]
         print(f"  implicit - explicit: run-out {ri - re:+.2f} points (se {math.hypot(rse, rise):.2f}), "
-              f"front stop {100 * (si / se_ - 1):+.1f} % (se {100 * math.hypot(sse, sise) / se_:.1f} %)")
+              f"front stop {100 * (si / se_ - 1):+.1f} % (se {100 * math.hypot(sse, sise) / se_:.1f} %), "
+              f"run-out at the end {ei - ee:+.2f} points (se {math.hypot(ese, eise):.2f})")
     return 0
