@@ -34,7 +34,11 @@ def test_the_suggested_compressibility_brings_the_flow_to_the_target(capsys):
     mach, out = _describe_mach(capsys, "gravity.tilt_deg=28")
     assert mach > 2.5 and "warning" in out
     suggested = re.search(r"material\.grain_compressibility: ([0-9.e+-]+)", out).group(1)
-    mach_after, out_after = _describe_mach(capsys, "gravity.tilt_deg=28", f"material.grain_compressibility={suggested}")
+    shift = float(re.search(r"numerics\.particle_shifting\.coefficient: ([0-9.e+-]+)", out).group(1))
+    factor = float(re.search(r"sound ([0-9.e+-]+)x faster", out).group(1))
+    assert shift == pytest.approx(0.2 / factor, rel=5e-3)  # the shift's rate zeta c stays what it was
+    mach_after, out_after = _describe_mach(capsys, "gravity.tilt_deg=28", f"material.grain_compressibility={suggested}",
+                                           f"numerics.particle_shifting.coefficient={shift}")
     assert mach_after == pytest.approx(MACH_TARGET * 0.3, abs=0.01)
     assert "warning" not in out_after
 
