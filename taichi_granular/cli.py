@@ -197,6 +197,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--skins", type=float, nargs="+",
                    help="throughput: numerics.neighbour_skin values measured side by side at each size "
                         "(default: the scene default)")
+    p.add_argument("--orders", nargs="+", choices=["lattice", "shuffled", "reordered"],
+                   help="throughput: particle orders measured side by side (shuffled: a random order left so; "
+                        "reordered: the same, sorted by cell once)")
     p.add_argument("--quick", action="store_true", help="accuracy: the few-minute sweep (never rewrites the README)")
     p.add_argument("--cases", nargs="+", help="accuracy, viscosity: only cases whose name contains one of these")
     p.add_argument("--window", type=float, default=0.01, help="viscosity: simulated seconds timed from release")

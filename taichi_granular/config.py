@@ -664,6 +664,10 @@ class Numerics:
         "list rebuilt only when a particle has moved more than half the skin (neighbors.py; 0.3: 3D coarse collapse "
         "1.5x, 2D 160k block 1.1-1.4x faster than scanning the cells, measured); 0 scans the cells in every pair "
         "loop", 0.3, "-", bounds="[0, 2]")
+    reorder_every: int = _key(
+        "every this many steps the material particles' fields are sorted by neighbour cell (counting sort), so that "
+        "neighbours lie close in memory as the flow mixes them (state.py ParticleOrder; outputs stay in the initial "
+        "order, by particle_id); 0 never", 100, "steps", bounds="[0, 1e9]")
     gradient_correction: Literal["scalar", "matrix", "none"] = _key(
         "kernel gradient renormalisation: full matrix M^-1 (exact for linear fields, also at walls and "
         "free surfaces), scalar d/tr(M), or none", "matrix")

@@ -99,6 +99,7 @@ class NeighborGrid:
             self.lists += ((self.fixed_sorted_ids, self.fixed_cell_start),)
         self.material_lists = self.lists[:1]
         self._fixed_binned = False
+        self._stale = False  # the material was permuted since the last build (cell_order)
         self.verlet = self.skin > 0.0
         self.capacity = int(capacity)
         self.rebuilds = 0  # Verlet list builds (bench throughput)
@@ -171,8 +172,10 @@ class NeighborGrid:
         Verlet list, only when some material particle has moved more than half the skin since
         the list was built (or the fixed particles have moved), and then rebuild the list."""
         self.builds += 1
-        if self.verlet and self.rebuilds and self._fixed_binned and 2.0 * self._largest_move() <= self.skin:
+        if self.verlet and self.rebuilds and self._fixed_binned and not self._stale \
+                and 2.0 * self._largest_move() <= self.skin:
             return
+        self._stale = False
         if self.n_fixed and not self._fixed_binned:
             self._bin(self.n_moving, self.n_particles, self.fixed_sorted_ids, self.fixed_cell_start)
             self._fixed_binned = True
@@ -186,6 +189,32 @@ class NeighborGrid:
                     f"support + skin ({self.reach:.4g} m), more than the {self.capacity} its neighbour list holds "
                     f"(twice the initial packing: the material has compacted far beyond it, or particles "
                     f"have clumped; numerics.neighbour_skin = 0 scans the cells instead)")
+
+    def cell_order(self, order) -> None:
+        """Fill ``order`` (n_moving slots) with the material ids sorted by cell at the current
+        positions (ids ascending within a cell; particles out of reach last, ascending); the
+        next :meth:`build` rebins and rebuilds the list (the caller is about to permute them)."""
+        self._bin(0, self.n_moving, self.sorted_ids, self.cell_start)
+        self._fill_order(order)
+        self.material_moved()
+
+    def material_moved(self) -> None:
+        """The material was permuted (or moved) behind the grid's back: rebin and rebuild the
+        list at the next :meth:`build`."""
+        self._stale = True
+
+    @ti.kernel
+    def _fill_order(self, order: ti.template()):
+        total = self.cell_start[self.n_cells]
+        ti.loop_config(serialize=runtime.serial_loops)
+        for k in range(total):
+            order[k] = self.sorted_ids[k]
+        slot = total
+        ti.loop_config(serialize=True)
+        for i in range(self.n_moving):
+            if self.particle_cell[i] < 0:
+                order[slot] = i
+                slot += 1
 
     def invalidate_fixed(self) -> None:
         """The fixed particles have moved: rebin them (and rebuild the list) at the next build."""

@@ -136,7 +136,8 @@ class Simulation:
         bad = self.guard.check()
         if bad is None:
             return
-        pid, reason, values = bad
+        slot, reason, values = bad
+        pid = int(self.state.particle_id[slot])  # as the outputs number it
         block = int(self.scheme.initial.block_of[pid])
         name = self.scene.particles[block].name
         arrays = self.scheme.snapshot()
@@ -171,7 +172,8 @@ class Simulation:
             self.output.write_frame(self.frame_index, self.t, arrays, self.state.n_material)
             self.output.write_diagnostics(self.last_diagnostics)
             if final or self.frame_index % self.scene.run.checkpoint_every == 0:
-                self.output.write_checkpoint({k: arrays[k] for k in self.state.specs}, self.counters())
+                # as stored (particle_id included): the resumed run continues in the same order
+                self.output.write_checkpoint(self.state.to_numpy(), self.counters())
             if self.renderer is not None:
                 from .render.frames import check_colour_field, png_name, write_png
                 if self.frame_index == 0:  # the first frame comes before the first step
@@ -204,6 +206,8 @@ class Simulation:
         from .output import read_checkpoint
 
         fields, counters = read_checkpoint(self.output.dir)
+        if "particle_id" not in fields and "position" in fields:  # written before reordering existed
+            fields["particle_id"] = np.arange(self.state.n_material, dtype=np.int32)
         missing = set(self.state.specs) - set(fields)
         if missing or any(fields[k].shape[0] != self.state.field(k).shape[0] for k in self.state.specs):
             raise ResumeError(f"the checkpoint in {self.output.dir} does not fit this scene "
@@ -236,6 +240,7 @@ class Simulation:
                     f"step {self.step_count}, t = {self.t:.6g} s: stable time step {self.dt:.3g} s fell below "
                     f"numerics.min_time_step = {min_dt:.3g} s"))
             dt = min(self.dt, next_output - self.t, end_time - self.t)
+            self.scheme.reorder_if_due(self.step_count)
             try:
                 self.scheme.step(dt, self.t)
             except (ViscousSolveError, NeighbourListOverflow) as error:

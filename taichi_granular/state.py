@@ -11,6 +11,8 @@ from typing import Dict, Iterable, List
 import numpy as np
 import taichi as ti
 
+from . import runtime
+
 SCOPES = ("all", "material", "wall")
 
 
@@ -43,6 +45,8 @@ CORE_FIELDS = (
     FieldSpec("pressure", "scalar", "pressure p, positive in compression", "Pa"),
     FieldSpec("acceleration", "vector", "dv/dt from the last rate evaluation", "m/s^2", "material"),
     FieldSpec("density_rate", "scalar", "d rho/dt from the last rate evaluation [M26]", "kg/m^3/s", "material"),
+    FieldSpec("particle_id", "scalar", "the particle's index in the scene's initial order: the fields are sorted by "
+              "cell now and then (ParticleOrder), outputs are written in this order", "-", "material", "int"),
 )
 
 
@@ -109,8 +113,33 @@ class ParticleState:
             f.from_numpy(np.ascontiguousarray(array, dtype=dtype))
 
     def to_numpy(self, names: Iterable[str] = None) -> Dict[str, np.ndarray]:
+        """The fields as they are stored (material possibly sorted by cell: see :meth:`in_initial_order`)."""
         names = list(self.specs) if names is None else names
         return {name: self.field(name).to_numpy() for name in names}
+
+    def in_initial_order(self, arrays: Dict[str, np.ndarray]) -> Dict[str, np.ndarray]:
+        """``arrays`` (from :meth:`to_numpy`, material first) with the material rows put back in
+        the scene's initial order (by particle_id); boundary rows are never reordered."""
+        order = np.argsort(self.particle_id.to_numpy(), kind="stable")
+        if np.array_equal(order, np.arange(self.n_material)):
+            return arrays
+        out = {}
+        for name, array in arrays.items():
+            if len(array) in (self.n_material, self.n_total) and name in self.specs and self.specs[name].scope != "wall":
+                array = array.copy()
+                array[: self.n_material] = array[order]
+            out[name] = array
+        return out
+
+    def material(self, name: str) -> np.ndarray:
+        """The material rows of field ``name`` in the scene's initial order (scripts and tests
+        that compare particles across steps: the stored order changes every
+        numerics.reorder_every steps)."""
+        array = self.field(name).to_numpy()[: self.n_material]
+        ids = self.particle_id.to_numpy()
+        out = np.empty_like(array)
+        out[ids] = array
+        return out
 
     def memory_table(self, itemsize: int) -> List[tuple]:
         """(name, scope, shape, bytes) of every allocated field."""
@@ -120,3 +149,49 @@ class ParticleState:
             nbytes = self.count(spec.scope) * spec.components(self.dim) * size
             rows.append((name, spec.scope, spec.shape, nbytes))
         return rows
+
+
+@ti.data_oriented
+class ParticleOrder:
+    """Permutes the material rows of every material and all-scope field of ``state`` into a
+    given order (a gather through one scratch field per field type); boundary rows stay."""
+
+    name, category = "reorder_by_cell", "neighbours"  # as a stage in run --profile
+
+    def __init__(self, state: ParticleState):
+        self.state = state
+        self.n = state.n_material
+        self.order = ti.field(ti.i32, self.n)  # slot k receives particle order[k]
+        self._scratch = {}
+        for name, spec in state.specs.items():  # allocated now, not between kernel launches
+            if spec.scope != "wall":
+                self._scratch_for(state.field(name))
+
+    def _scratch_for(self, f):
+        """A field of ``f``'s type over the material, one per type."""
+        if isinstance(f, ti.lang.matrix.MatrixField):
+            key = (f.n, f.m, f.ndim, f.dtype)
+            if key not in self._scratch:
+                self._scratch[key] = (ti.Matrix.field(f.n, f.m, f.dtype, self.n) if f.ndim == 2
+                                      else ti.Vector.field(f.n, f.dtype, self.n))
+        else:
+            key = (f.dtype,)
+            if key not in self._scratch:
+                self._scratch[key] = ti.field(f.dtype, self.n)
+        return self._scratch[key]
+
+    @ti.kernel
+    def _gather(self, f: ti.template(), scratch: ti.template()):
+        ti.loop_config(serialize=runtime.serial_loops)
+        for k in range(self.n):
+            scratch[k] = f[self.order[k]]
+        ti.loop_config(serialize=runtime.serial_loops)
+        for k in range(self.n):
+            f[k] = scratch[k]
+
+    def apply(self) -> None:
+        """Put the material into ``self.order`` (filled by the caller) in every field."""
+        for name, spec in self.state.specs.items():
+            if spec.scope != "wall":
+                f = self.state.field(name)
+                self._gather(f, self._scratch_for(f))

@@ -65,6 +65,6 @@ def lowest_and_rightmost(sim, end_time, interval=0.001):
     sim.run(end_time=0.0)
     while sim.t < end_time - 1e-12:
         sim.run(end_time=min(end_time, sim.t + interval))
-        x = sim.state.position.to_numpy()[:n]
+        x = sim.state.material("position")
         lowest, rightmost = min(lowest, x[:, 1].min()), max(rightmost, x[:, 0].max())
     return float(lowest), float(rightmost)

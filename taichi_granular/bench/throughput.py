@@ -19,11 +19,13 @@ GLASS_BEADS = {
 }
 
 
-def block_scene(n_particles: int, arch: str, precision: str, dp: float = 0.005, skin=None):
+def block_scene(n_particles: int, arch: str, precision: str, dp: float = 0.005, skin=None, reorder_every=None):
     side = math.sqrt(n_particles) * dp
     numerics = {"particle_spacing": dp, "artificial_viscosity": {"alpha": 0.05}}
     if skin is not None:
         numerics["neighbour_skin"] = skin
+    if reorder_every is not None:
+        numerics["reorder_every"] = reorder_every
     return scene_from_dict({
         "name": f"bench_{n_particles}", "dimension": 2, "arch": arch, "precision": precision,
         "domain": {"lower": [0.0, -0.02], "upper": [side, 1.5 * side], "periodic": ["x"]},
@@ -35,12 +37,24 @@ def block_scene(n_particles: int, arch: str, precision: str, dp: float = 0.005, 
     })
 
 
-def measure(n_particles: int, steps: int, arch: str, precision: str, skin=None) -> dict:
+def measure(n_particles: int, steps: int, arch: str, precision: str, skin=None, order: str = "lattice") -> dict:
+    """``order``: the material as built (``lattice``, the default reordering), shuffled at random
+    and left so (``shuffled``, numerics.reorder_every = 0), or shuffled and then sorted by cell once
+    (``reordered``; no reordering within the timed steps)."""
+    import numpy as np
+
     from ..simulation import Simulation
 
-    scene = block_scene(n_particles, arch, precision, skin=skin)
+    every = {"lattice": None, "shuffled": 0, "reordered": 10**9}[order]
+    scene = block_scene(n_particles, arch, precision, skin=skin, reorder_every=every)
     sim = Simulation(scene, progress=False)
+    if order != "lattice":
+        sim.scheme.permute(np.random.default_rng(0).permutation(sim.state.n_material))
+        if order == "reordered":
+            sim.scheme.reorder()
     sim.run(max_steps=5)  # compile and warm up
+    if order == "lattice" and sim.scheme.particle_order is not None:
+        sim.scheme.reorder()  # compiles the reordering kernels before the timing
     import taichi as ti
     ti.sync()
     start_steps, start_t = sim.step_count, sim.t
@@ -61,21 +75,23 @@ def measure(n_particles: int, steps: int, arch: str, precision: str, skin=None) 
             "particle_steps_per_second": n * done / wall, "ms_per_step": 1e3 * wall / done,
             "seconds_per_simulated_second": wall / simulated if simulated > 0 else float("nan"),
             "memory_mib": sim.scheme.memory_bytes() / 2**20,
-            "skin": scene.numerics.neighbour_skin, "list_builds": grid.rebuilds / max(grid.builds, 1),
+            "skin": scene.numerics.neighbour_skin, "order": order, "list_builds": grid.rebuilds / max(grid.builds, 1),
             "shares": {k: v / total for k, v in shares.items() if v > 0}}
 
 
 def main(args) -> int:
     runtime.init(args.arch, args.precision)
     print(f"mu(I) full step, 2D, {args.arch}/{args.precision}, dp = 5 mm, h/dp = 1.3, {args.steps} timed steps")
-    print(f"{'particles':>10} {'walls':>7} {'skin/h':>6} {'Mparticle-steps/s':>18} {'ms/step':>9} {'s per sim s':>12} "
+    print(f"{'particles':>10} {'walls':>7} {'skin/h':>6} {'order':>9} {'Mparticle-steps/s':>18} {'ms/step':>9} {'s per sim s':>12} "
           f"{'MiB':>7} {'rebuilt':>7}  breakdown")
     for size in args.sizes:
-        for skin in getattr(args, "skins", None) or [None]:
-            r = measure(size, args.steps, args.arch, args.precision, skin)
+        for skin, order in [(k, o) for k in getattr(args, "skins", None) or [None]
+                            for o in getattr(args, "orders", None) or ["lattice"]]:
+            r = measure(size, args.steps, args.arch, args.precision, skin, order)
             breakdown = " ".join(f"{k} {100 * v:.0f}%" for k, v in sorted(r["shares"].items(), key=lambda kv: -kv[1]))
             rebuilt = f"{100 * r['list_builds']:.0f}%" if r["skin"] > 0 else "-"
-            print(f"{r['particles']:>10} {r['walls']:>7} {r['skin']:>6.2f} {r['particle_steps_per_second'] / 1e6:>18.3f} "
+            print(f"{r['particles']:>10} {r['walls']:>7} {r['skin']:>6.2f} {r['order']:>9} "
+                  f"{r['particle_steps_per_second'] / 1e6:>18.3f} "
                   f"{r['ms_per_step']:>9.2f} {r['seconds_per_simulated_second']:>12.1f} {r['memory_mib']:>7.1f} "
                   f"{rebuilt:>7}  {breakdown}", flush=True)
     return 0

@@ -31,13 +31,12 @@ def settled_layer_data(model: str, height=0.05, length=0.04, dp=0.005):
 
 def vertical_stress(sim) -> np.ndarray:
     """-sigma_yy of every material particle, compression positive  [Pa]."""
-    n = sim.state.n_material
     s = sim.state
     if s.has("frictional_stress"):  # hypoplastic, tension positive
-        return -s.frictional_stress.to_numpy()[:n, 1, 1]
-    p = s.pressure.to_numpy()[:n]
+        return -s.material("frictional_stress")[:, 1, 1]
+    p = s.material("pressure")
     if s.has("deviatoric_stress"):
-        return p - s.deviatoric_stress.to_numpy()[:n, 1, 1]
+        return p - s.material("deviatoric_stress")[:, 1, 1]
     return p  # mu(I): no stress tensor; at rest its deviatoric stress vanishes
 
 

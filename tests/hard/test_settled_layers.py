@@ -19,14 +19,14 @@ def test_settled_layer_stays_hydrostatic_and_at_rest(model):
     data["run"]["end_time"] = 100.0
     sim = Simulation(build(data))
     n = sim.state.n_material
-    x0 = sim.state.position.to_numpy()[:n]
-    mass = sim.state.mass.to_numpy()[:n]
+    x0 = sim.state.material("position")
+    mass = sim.state.material("mass")
     sim.run(max_steps=STEPS // 2)
-    x_half = sim.state.position.to_numpy()[:n]
+    x_half = sim.state.material("position")
     sim.run(max_steps=STEPS)
     assert sim.step_count == STEPS
-    x = sim.state.position.to_numpy()[:n]
-    v = sim.state.velocity.to_numpy()[:n]
+    x = sim.state.material("position")
+    v = sim.state.material("velocity")
     assert np.abs(v).max() < 1e-3 * np.sqrt(G * H)
 
     def shift(a, b):
