@@ -31,6 +31,7 @@ import taichi as ti
 
 from . import runtime
 
+SUB_CELLS = 4  # per axis, the within-cell order of a reordering (cell_order)
 SCAN_BLOCK = 256  # cells per block of the blocked prefix scan
 
 
@@ -192,7 +193,8 @@ class NeighborGrid:
 
     def cell_order(self, order) -> None:
         """Fill ``order`` (n_moving slots) with the material ids sorted by cell at the current
-        positions (ids ascending within a cell; particles out of reach last, ascending); the
+        positions (within a cell row-major on a finer grid, then by id; particles out of reach
+        last, ascending); the
         next :meth:`build` rebins and rebuilds the list (the caller is about to permute them)."""
         self._bin(0, self.n_moving, self.sorted_ids, self.cell_start)
         self._fill_order(order)
@@ -203,12 +205,36 @@ class NeighborGrid:
         list at the next :meth:`build`."""
         self._stale = True
 
+    @ti.func
+    def _sub_cell(self, x):
+        """Row-major index of x's place on a grid SUB_CELLS times finer than the cells, inside its
+        cell: the order within a cell (ids alone leave a shuffled cell shuffled: 13 % slower at
+        160k particles than row-major within the cell, measured)."""
+        key = 0
+        for a in ti.static(range(self.dim - 1, -1, -1)):
+            u = (x[a] - self.lower[a]) / self.cell_size[a]
+            k = ti.cast(ti.floor((u - ti.floor(u)) * SUB_CELLS), ti.i32)
+            key = key * SUB_CELLS + ti.min(ti.max(k, 0), SUB_CELLS - 1)
+        return key
+
     @ti.kernel
     def _fill_order(self, order: ti.template()):
         total = self.cell_start[self.n_cells]
         ti.loop_config(serialize=runtime.serial_loops)
         for k in range(total):
             order[k] = self.sorted_ids[k]
+        # insertion sort inside each cell by sub-cell, then id (stable: ids are ascending)
+        ti.loop_config(serialize=runtime.serial_loops)
+        for c in range(self.n_cells):
+            first, last = self.cell_start[c], self.cell_start[c + 1]
+            for k in range(first + 1, last):
+                moving = order[k]
+                key = self._sub_cell(self.position[moving])
+                m = k - 1
+                while m >= first and self._sub_cell(self.position[order[m]]) > key:
+                    order[m + 1] = order[m]
+                    m -= 1
+                order[m + 1] = moving
         slot = total
         ti.loop_config(serialize=True)
         for i in range(self.n_moving):

@@ -16,7 +16,7 @@ _current: tuple | None = None
 # before running anything. On the CPU, handing a loop to the thread pool costs ~0.1 ms a launch
 # on this 2-core machine against ~0.02 ms serial (measured), which dominates small scenes.
 serial_loops = False
-SERIAL_BELOW = 3_000  # particles; measured crossover on 2 CPU cores (see choose_loops)
+SERIAL_BELOW = 2_500  # particles; measured crossover on 2 idle CPU cores (see choose_loops)
 
 
 def init(arch: str = "cpu", precision: str = "f64", force: bool = False) -> None:

@@ -48,13 +48,13 @@ def measure(n_particles: int, steps: int, arch: str, precision: str, skin=None, 
     every = {"lattice": None, "shuffled": 0, "reordered": 10**9}[order]
     scene = block_scene(n_particles, arch, precision, skin=skin, reorder_every=every)
     sim = Simulation(scene, progress=False)
-    if order != "lattice":
-        sim.scheme.permute(np.random.default_rng(0).permutation(sim.state.n_material))
-        if order == "reordered":
-            sim.scheme.reorder()
-    sim.run(max_steps=5)  # compile and warm up
-    if order == "lattice" and sim.scheme.particle_order is not None:
-        sim.scheme.reorder()  # compiles the reordering kernels before the timing
+    n_material = sim.state.n_material
+    # the lattice through an identity permutation: the gather kernels compile before the timing
+    sim.scheme.permute(np.random.default_rng(0).permutation(n_material) if order != "lattice"
+                       else np.arange(n_material))
+    if order == "reordered":
+        sim.scheme.reorder()
+    sim.run(max_steps=5)  # compile and warm up (and the list's rebuild after the permutation)
     import taichi as ti
     ti.sync()
     start_steps, start_t = sim.step_count, sim.t
