@@ -231,7 +231,9 @@ class NeighborGrid:
                 moving = order[k]
                 key = self._sub_cell(self.position[moving])
                 m = k - 1
-                while m >= first and self._sub_cell(self.position[order[m]]) > key:
+                while m >= first:  # (Taichi's `and` does not short-circuit: no order[first - 1])
+                    if self._sub_cell(self.position[order[m]]) <= key:
+                        break
                     order[m + 1] = order[m]
                     m -= 1
                 order[m + 1] = moving
@@ -281,7 +283,9 @@ class NeighborGrid:
             for k in range(1, stored):
                 key = self.neighbour_ids[i, k]
                 m = k - 1
-                while m >= 0 and self.neighbour_ids[i, m] > key:
+                while m >= 0:  # (Taichi's `and` does not short-circuit: no [i, -1])
+                    if self.neighbour_ids[i, m] <= key:
+                        break
                     self.neighbour_ids[i, m + 1] = self.neighbour_ids[i, m]
                     m -= 1
                 self.neighbour_ids[i, m + 1] = key
@@ -340,7 +344,9 @@ class NeighborGrid:
             for k in range(first + 1, last):
                 key = sorted_ids[k]
                 m = k - 1
-                while m >= first and sorted_ids[m] > key:
+                while m >= first:  # (Taichi's `and` does not short-circuit)
+                    if sorted_ids[m] <= key:
+                        break
                     sorted_ids[m + 1] = sorted_ids[m]
                     m -= 1
                 sorted_ids[m + 1] = key
