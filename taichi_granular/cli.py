@@ -191,12 +191,18 @@ def build_parser() -> argparse.ArgumentParser:
                    help="throughput: particle-steps/s by size; accuracy: error against cost over resolution "
                         "and numerics (bench/accuracy.py); viscosity: explicit against implicit viscosity on the "
                         "Table 3 collapses (bench/viscosity.py)")
-    p.add_argument("--sizes", type=int, nargs="+", default=[10_000, 40_000, 160_000],
-                   help="throughput: approximate particle counts")
+    p.add_argument("--sizes", type=int, nargs="+",
+                   help="throughput: approximate particle counts (default 1k 10k 40k 160k in 2D, 10k 40k 150k in 3D)")
     p.add_argument("--steps", type=int, default=50, help="throughput: timed steps per size")
     p.add_argument("--skins", type=float, nargs="+",
                    help="throughput: numerics.neighbour_skin values measured side by side at each size "
                         "(default: the scene default)")
+    p.add_argument("--models", nargs="+", choices=["mu_i", "hypoplastic", "elastoplastic"],
+                   help="throughput: the models' blocks measured (default mu_i)")
+    p.add_argument("--dims", type=int, nargs="+", choices=[2, 3], help="throughput: dimensions (default 2)")
+    p.add_argument("--compare", action="store_true",
+                   help="throughput: also time a bare density sweep over the same list (the ceiling of a pair "
+                        "pass) and print the step as a multiple of it")
     p.add_argument("--orders", nargs="+", choices=["lattice", "shuffled", "reordered"],
                    help="throughput: particle orders measured side by side (shuffled: a random order left so; "
                         "reordered: the same, sorted by cell once)")

@@ -1,0 +1,39 @@
+"""bench throughput (bench/throughput.py) on tiny blocks: what it counts is checked against what
+the step is known to do, never its speed (timing is for the benchmark, not for tests)."""
+import math
+
+import pytest
+
+from taichi_granular import runtime
+from taichi_granular.bench import throughput
+
+
+@pytest.mark.parametrize("model, dimension, passes", [("mu_i", 2, 3), ("hypoplastic", 2, 6), ("elastoplastic", 3, 4)])
+def test_each_model_block_counts_its_passes_neighbours_and_launches(model, dimension, passes):
+    """Pair passes per step: mu(I) 3 (Verlet, one rate evaluation); hypoplastic 3 per evaluation
+    of the predictor-corrector; elastoplastic 2 per evaluation. Neighbours listed per particle
+    within 2h + skin: a full disc (sphere) of the lattice holds pi r^2 (4/3 pi r^3) particles; the
+    block's free surface and floor leave fewer, never more."""
+    runtime.init("cpu", "f64")
+    row = throughput.measure(120, 3, "cpu", "f64", model=model, dimension=dimension, compare=True)
+    assert row["particles"] >= 100 and row["walls"] > 0
+    assert row["pair_passes"] == passes
+    scene = throughput.block_scene(120, "cpu", "f64", model, dimension)
+    h = scene.numerics.smoothing_length
+    radius = (2.0 + scene.numerics.neighbour_skin) * h / scene.numerics.particle_spacing  # skin in h
+    full = math.pi * radius**2 if dimension == 2 else 4.0 / 3.0 * math.pi * radius**3
+    assert 0.3 * full < row["neighbours"] < full
+    # every stage is a launch: at least the pair passes plus the integrator's updates and the
+    # end-of-step time step and guard; dt, the guard and the list check are read back every step
+    assert row["launches"] >= passes + 4
+    assert 3.0 <= row["host_reads"] < row["launches"]
+    assert row["sweep_ms"] > 0.0 and row["ms_per_step"] > row["sweep_ms"]  # a step is several passes
+    assert abs(sum(row["shares"].values()) - 1.0) < 1e-9
+
+
+def test_small_blocks_are_a_layer_wide_enough_for_the_periodic_axes():
+    scene = throughput.block_scene(100, "cpu", "f64", "elastoplastic", 3)
+    block = scene.particles[0]
+    support = 2.0 * scene.numerics.smoothing_length
+    assert all(u - l >= 3 * support for l, u in zip(block.lower[:2], block.upper[:2]))
+    assert block.upper[2] - block.lower[2] == pytest.approx(scene.numerics.particle_spacing)
