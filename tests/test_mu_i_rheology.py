@@ -75,6 +75,29 @@ def test_root_brackets_the_monotone_form(dim):
     np.testing.assert_allclose(1 + t[at_rest] ** 2, x_m[at_rest], rtol=1e-14)
 
 
+@pytest.mark.parametrize("dim", [2, 3])
+def test_root_from_a_guess_is_the_root_from_the_bracket(dim):
+    """The EOS stage starts Newton from last step's root: from any start (the root itself, 1 %
+    off either way, far outside the bracket) the safeguarded solve lands on the same root."""
+    model = MuIRheology(GLASS, dim, 0.0065)
+    rho_star, gamma_dot = states()
+    cold, _ = solve(model, rho_star, gamma_dot)
+    n = len(rho_star)
+    a, g, guess, t = (ti.field(float, n) for _ in range(4))
+    a.from_numpy(rho_star)
+    g.from_numpy(gamma_dot)
+
+    @ti.kernel
+    def warm():
+        for i in range(n):
+            t[i] = model.grain_compression(a[i], g[i], guess[i])
+
+    for factor in (1.0, 0.99, 1.01, 0.0, 1e6):
+        guess.from_numpy(cold * factor)
+        warm()
+        np.testing.assert_allclose(t.to_numpy(), cold, rtol=1e-12, atol=1e-300)
+
+
 def test_root_is_largest_root_of_the_printed_cubic():
     """Against numpy.roots of [M44] as printed: the same root, and at least as accurate.
 
