@@ -194,8 +194,8 @@ class NeighborGrid:
     def cell_order(self, order) -> None:
         """Fill ``order`` (n_moving slots) with the material ids sorted by cell at the current
         positions (within a cell row-major on a finer grid, then by id; particles out of reach
-        last, ascending); the
-        next :meth:`build` rebins and rebuilds the list (the caller is about to permute them)."""
+        last, ascending); the next :meth:`build` rebins and rebuilds the list (the caller is
+        about to permute them)."""
         self._bin(0, self.n_moving, self.sorted_ids, self.cell_start)
         self._fill_order(order)
         self.material_moved()

@@ -119,15 +119,16 @@ class ParticleState:
 
     def in_initial_order(self, arrays: Dict[str, np.ndarray]) -> Dict[str, np.ndarray]:
         """``arrays`` (from :meth:`to_numpy`, material first) with the material rows put back in
-        the scene's initial order (by particle_id); boundary rows are never reordered."""
-        order = np.argsort(self.particle_id.to_numpy(), kind="stable")
-        if np.array_equal(order, np.arange(self.n_material)):
+        the scene's initial order (row particle_id[k] gets stored row k); boundary rows are never
+        reordered."""
+        ids = self.particle_id.to_numpy()
+        if np.array_equal(ids, np.arange(self.n_material)):
             return arrays
         out = {}
         for name, array in arrays.items():
-            if len(array) in (self.n_material, self.n_total) and name in self.specs and self.specs[name].scope != "wall":
+            if name in self.specs and self.specs[name].scope != "wall" and len(array) >= self.n_material:
                 array = array.copy()
-                array[: self.n_material] = array[order]
+                array[ids] = array[: self.n_material].copy()
             out[name] = array
         return out
 
@@ -135,11 +136,7 @@ class ParticleState:
         """The material rows of field ``name`` in the scene's initial order (scripts and tests
         that compare particles across steps: the stored order changes every
         numerics.reorder_every steps)."""
-        array = self.field(name).to_numpy()[: self.n_material]
-        ids = self.particle_id.to_numpy()
-        out = np.empty_like(array)
-        out[ids] = array
-        return out
+        return self.in_initial_order({name: self.field(name).to_numpy()})[name][: self.n_material]
 
     def memory_table(self, itemsize: int) -> List[tuple]:
         """(name, scope, shape, bytes) of every allocated field."""

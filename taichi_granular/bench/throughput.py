@@ -83,7 +83,7 @@ def _launches_and_reads(sim, steps: int):
     sim.run(max_steps=sim.step_count + steps)
     profile.disable()
     calls = {}
-    for (filename, _, name), row in pstats.Stats(profile).stats.items():
+    for (_, _, name), row in pstats.Stats(profile).stats.items():
         calls[name] = calls.get(name, 0) + row[1]  # primitive calls
     launches = calls.get("launch_kernel")  # Kernel.launch_kernel (the C++ binding is named "<built-in ...>")
     if launches is None:
