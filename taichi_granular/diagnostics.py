@@ -3,6 +3,7 @@ import numpy as np
 import taichi as ti
 
 from . import runtime
+from .launch import launcher
 
 GUARD_CODES = {
     1: "non-finite position",
@@ -116,7 +117,7 @@ class Guard:
 
     def check(self):
         """None if every particle is sound, else (particle id, reason, values)."""
-        bad = int(self._check())
+        bad = int(launcher(self, "_check")())
         if bad >= self.state.n_material:
             return None
         code = int(self.code[bad])

@@ -16,6 +16,7 @@ the deviatoric stress of [A6]) are advanced like the density.
 import taichi as ti
 
 from . import runtime
+from .launch import launcher
 
 from .physics.stage import Stage
 from .state import FieldSpec
@@ -55,9 +56,9 @@ class _Update(Stage):
 
     def full_step(self, dt: float, scheme) -> None:
         """The kick, the implicit viscous solve where the scene has one, the drift."""
-        scheme.profiler(self, self.kick, dt)
+        scheme.profiler(self, launcher(self, "kick"), dt)
         scheme.solve_viscosity()
-        scheme.profiler(self, self.drift, dt)
+        scheme.profiler(self, launcher(self, "drift"), dt)
 
     @ti.func
     def wrap(self, i):
@@ -170,7 +171,7 @@ class SymplecticVerlet(_Update):
         evaluate_rates()
 
     def step(self, dt: float, scheme) -> None:
-        scheme.profiler(self, self.half_step, dt)
+        scheme.profiler(self, launcher(self, "half_step"), dt)
         scheme.after_move(0.5)
         scheme.evaluate_rates()
         self.full_step(dt, scheme)
@@ -195,7 +196,7 @@ class PredictorCorrector(_Update):
 
     def step(self, dt: float, scheme) -> None:
         scheme.evaluate_rates()
-        scheme.profiler(self, self.half_step, dt)
+        scheme.profiler(self, launcher(self, "half_step"), dt)
         scheme.after_move(0.5)
         scheme.evaluate_rates()
         self.full_step(dt, scheme)
@@ -216,14 +217,19 @@ class StableTimeStep(Stage):
     def __init__(self, ctx):
         super().__init__(ctx)
         self.cfl = ctx.scene.numerics.cfl
-        self.result = ti.field(float, shape=())
+        self.last = float("nan")
 
     @ti.kernel
-    def _run(self):
-        self.result[None] = 1e30
+    def _run(self) -> float:
+        result = 1e30
         ti.loop_config(serialize=runtime.serial_loops)
         for i in range(self.state.n_material):
-            ti.atomic_min(self.result[None], self.model.stable_time_step(i))
+            ti.atomic_min(result, self.model.stable_time_step(i))
+        return result
+
+    def run(self) -> None:
+        self.last = self.cfl * launcher(self, "_run")()
 
     def value(self) -> float:
-        return self.cfl * float(self.result[None])
+        """The stable time step found by the last run [s]."""
+        return self.last

@@ -30,6 +30,7 @@ from typing import Sequence
 import taichi as ti
 
 from . import runtime
+from .launch import launcher
 
 SUB_CELLS = 4  # per axis, the within-cell order of a reordering (cell_order)
 SCAN_BLOCK = 256  # cells per block of the blocked prefix scan
@@ -174,7 +175,7 @@ class NeighborGrid:
         the list was built (or the fixed particles have moved), and then rebuild the list."""
         self.builds += 1
         if self.verlet and self.rebuilds and self._fixed_binned and not self._stale \
-                and 2.0 * self._largest_move() <= self.skin:
+                and 2.0 * launcher(self, "_largest_move")() <= self.skin:
             return
         self._stale = False
         if self.n_fixed and not self._fixed_binned:

@@ -13,6 +13,7 @@ import taichi as ti
 from . import runtime
 from .neighbors import NeighborGrid, NeighbourSearch, list_capacity
 from .integrators import INTEGRATORS, StableTimeStep
+from .launch import launcher
 from .physics.artificial_stress import ArtificialStress
 from .physics.artificial_viscosity import ArtificialViscosity
 from .physics.gradient_correction import GRADIENTS
@@ -61,6 +62,34 @@ def rate_stage_classes(scene: Scene, model) -> List[type]:
     return classes
 
 
+@ti.data_oriented
+class Clock:
+    """The 0-d fields that kernels read the step's timing from: ``dt`` of the step being taken
+    [s], the ``time`` the position stages move the scene to [s] and the ``step_fraction`` of the
+    step that is [-]. Set by one launch each (launch.py), not by field writes from Python, each
+    of which costs as much as two such launches."""
+
+    def __init__(self):
+        self.dt = ti.field(float, shape=())
+        self.time = ti.field(float, shape=())
+        self.step_fraction = ti.field(float, shape=())
+
+    @ti.kernel
+    def _begin_step(self, dt: float):
+        self.dt[None] = dt
+
+    @ti.kernel
+    def _move_to(self, time: float, fraction: float):
+        self.time[None] = time
+        self.step_fraction[None] = fraction
+
+    def begin_step(self, dt: float) -> None:
+        launcher(self, "_begin_step")(dt)
+
+    def move_to(self, time: float, fraction: float) -> None:
+        launcher(self, "_move_to")(time, fraction)
+
+
 class Scheme:
     """State, neighbour grid, smoothing function, boundary and material models, and stages."""
 
@@ -96,9 +125,8 @@ class Scheme:
                                  scene.domain.periodic_mask, self.smoothing.support, n_moving=ini.n_material,
                                  skin=skin, capacity=capacity if skin > 0.0 else 0)
         self.walls = walls_cls(self.state, scene.gravity_vector)
-        self.dt = ti.field(float, shape=())
-        self.time = ti.field(float, shape=())
-        self.step_fraction = ti.field(float, shape=())
+        self.clock = Clock()
+        self.dt, self.time, self.step_fraction = self.clock.dt, self.clock.time, self.clock.step_fraction
         self._step = (0.0, 0.0)  # (t, dt) of the step being taken
         ctx = Context(state=self.state, grid=self.grid, smoothing=self.smoothing, walls=self.walls,
                       model=model, scene=scene, time_step=self.dt, time=self.time,
@@ -146,8 +174,7 @@ class Scheme:
         """Stages that act on positions right after the integrator moves particles to
         t + fraction dt of the step being taken (moving walls go there too)."""
         t, dt = self._step
-        self.time[None] = t + fraction * dt
-        self.step_fraction[None] = fraction
+        self.clock.move_to(t + fraction * dt, fraction)
         for stage in self.position_stages:
             self.profiler(stage)
 
@@ -179,7 +206,7 @@ class Scheme:
 
     def step(self, dt: float, t: float = 0.0) -> None:
         """Advance from time t by dt."""
-        self.dt[None] = dt  # stages that act over one step (wall friction) read it
+        self.clock.begin_step(dt)  # stages that act over one step (wall friction) read it
         self._step = (t, dt)
         self.integrator.step(dt, self)
 

@@ -6,6 +6,7 @@ from typing import Any, Tuple
 import taichi as ti
 
 from .. import runtime
+from ..launch import launcher
 from ..state import FieldSpec
 
 # The categories of the per-stage profile, in the order a step runs them.
@@ -44,7 +45,7 @@ class Stage:
         self.smoothing, self.gradient = ctx.smoothing, ctx.gradient
 
     def run(self) -> None:
-        self._run()
+        launcher(self, "_run")()  # Taichi's launch without its per-call bookkeeping (launch.py)
 
     def describe(self) -> str:
         eq = f" {self.equation}" if self.equation else ""
@@ -120,7 +121,7 @@ class FusedPairs(Stage):
 
     def run(self) -> None:
         FUSED_COMPILED.update(f"{type(m).__module__}.{type(m).__qualname__}.pair" for m in self.members)
-        self._run()
+        launcher(self, "_run")()
 
     @ti.func
     def pair(self, i, j, x_ij, r, accs: ti.template()):

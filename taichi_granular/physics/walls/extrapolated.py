@@ -193,7 +193,7 @@ class WallRotation(Stage):
         self.time = ctx.time
 
     def run(self) -> None:
-        self._run()
+        super().run()
         self.grid.invalidate_fixed()  # boundary particles moved: rebin them at the next build
 
     @ti.kernel
