@@ -713,6 +713,9 @@ class Run:
     guard: Literal["step", "stage"] = _key(
         "when the run-time guard checks every particle for NaN/Inf, leaving the domain and an implausible "
         "density: after each step, or after every stage of it (names the stage that went wrong; slower)", "step")
+    guard_every: int = _key(
+        "with guard: step, check every this many steps (and before every frame): one host synchronisation "
+        "fewer per step on a GPU; a failure then names the steps within which it arose", 1, bounds="[1, 1e6]")
 
 
 
@@ -878,6 +881,9 @@ class Scene:
         if self.material.model == "mu_i" and self.numerics.stress_diffusion > 0.0:
             raise ConfigError("numerics.stress_diffusion", "mu(I) integrates no stress (its stress is algebraic); "
                                                            "set it to 0")
+        if self.run.guard == "stage" and self.run.guard_every > 1:
+            raise ConfigError("run.guard_every", "run.guard: stage checks after every stage of every step; "
+                                                 "set run.guard_every: 1 (or run.guard: step)")
         self._check_size()
         support = 2.0 * self.numerics.smoothing_length
         for a, name in enumerate(AXES[:dim]):

@@ -13,10 +13,16 @@ _current: tuple | None = None
 
 # Every top-level particle loop is written ``ti.loop_config(serialize=runtime.serial_loops)``.
 # Taichi reads the flag when it compiles a kernel (at its first launch), so the scheme sets it
-# before running anything. On the CPU, handing a loop to the thread pool costs ~0.1 ms a launch
-# on this 2-core machine against ~0.02 ms serial (measured), which dominates small scenes.
+# before running anything. On the CPU, handing a loop to the thread pool costs ~60 us on this
+# 2-core machine against ~2 us for a serial launch (launch.py; measured), which dominates small scenes.
 serial_loops = False
-SERIAL_BELOW = 2_500  # particles; measured crossover on 2 idle CPU cores (see choose_loops)
+# particles, material and boundary; measured crossover on 2 idle CPU cores (see choose_loops):
+# mu(I) 2D serial / parallel ms a step at 1 088 / 1 617 / 2 115 particles 1.21 / 1.72 / 2.22
+# against 1.54 / 1.70 / 2.10, hypoplastic 2D 2.64 / 3.79 / 5.19 against 3.19 / 3.45 / 4.04;
+# the elastoplastic 2D step, with more and lighter loops, crosses over later (2.00 / 2.45 ms at
+# 2 136, even at 3 166): a loss of up to a fifth for it between the two sizes. 3D mu(I) blocks:
+# 6.9 / 14.1 ms serial against 7.4 / 9.3 parallel at 1 300 / 2 507 particles.
+SERIAL_BELOW = 1_500
 
 
 def init(arch: str = "cpu", precision: str = "f64", force: bool = False) -> None:

@@ -125,6 +125,7 @@ class Simulation:
         self.last_diagnostics: dict = {}
         self.peak_kinetic_energy = 0.0
         self.mach_warned = False
+        self.last_guarded = 0  # the last step the guard found sound
 
     # ---- pieces -------------------------------------------------------------------------------
 
@@ -135,6 +136,7 @@ class Simulation:
         ``failure.npz`` and ``failure.vtu`` next to the outputs, the last checkpoint untouched."""
         bad = self.guard.check()
         if bad is None:
+            self.last_guarded = self.step_count
             return
         slot, reason, values = bad
         pid = int(self.state.particle_id[slot])  # as the outputs number it
@@ -147,7 +149,12 @@ class Simulation:
                    f"{reason}: " + ", ".join(f"{k} = {v}" for k, v in values.items()))
         if broken:
             message += "; non-finite fields of this particle: " + ", ".join(broken)
-        if self.scene.run.guard == "step":
+        every = self.scene.run.guard_every
+        if every > 1 and self.step_count > self.last_guarded + 1:
+            message += (f" (checked every {every} steps: it arose within steps {self.last_guarded + 1}-"
+                        f"{self.step_count}; resume from the last checkpoint with --set run.guard_every=1 "
+                        f"--set run.guard=stage to name the step and the stage)")
+        elif self.scene.run.guard == "step":
             message += " (resume from the last checkpoint with --set run.guard=stage to name the stage)"
         raise SimulationError(self._write_failure(message))
 
@@ -215,6 +222,7 @@ class Simulation:
         self.state.load(fields)
         self.t, self.step_count, self.dt = float(counters["t"]), int(counters["step"]), float(counters["dt"])
         self.frame_index = int(counters["frame"]) + 1  # the checkpoint was taken at that frame
+        self.last_guarded = self.step_count  # checkpoints are written after the guard passed
         self.peak_kinetic_energy = float(counters["peak_kinetic_energy"])
         self.output.reopen(self.t)
         self.scheme.place(self.t)  # neighbour grid (and moving walls) of the loaded state
@@ -236,6 +244,8 @@ class Simulation:
             if max_steps is not None and self.step_count >= max_steps:
                 break
             if not self.dt >= min_dt:
+                if self.last_guarded != self.step_count:  # a NaN time step: name the particle behind it
+                    self._check(f"after step {self.step_count}")
                 raise SimulationError(self._write_failure(
                     f"step {self.step_count}, t = {self.t:.6g} s: stable time step {self.dt:.3g} s fell below "
                     f"numerics.min_time_step = {min_dt:.3g} s"))
@@ -248,9 +258,11 @@ class Simulation:
                     f"step {self.step_count + 1}, t = {self.t:.6g} s, dt = {dt:.3g} s: {error}")) from None
             self.step_count += 1
             self.t += dt
-            self._check(f"after step {self.step_count}")
+            frame_due = self.t >= next_output - 1e-9 * interval
+            if frame_due or self.step_count % self.scene.run.guard_every == 0:  # never a bad frame written
+                self._check(f"after step {self.step_count}")
             self.dt = self.scheme.stable_time_step()
-            if self.t >= next_output - 1e-9 * interval:
+            if frame_due:
                 self.write_frame()
                 next_output += interval
                 if self.at_rest():
@@ -282,6 +294,8 @@ class Simulation:
                 progress.close()
             if self.step_count > start_steps and self.last_diagnostics.get("step") != self.step_count:
                 # stopped between output times (max_steps, end_time off the output grid, Ctrl-C)
+                if self.last_guarded != self.step_count:
+                    self._check(f"after step {self.step_count}")
                 self.write_frame(final=True)
         if interrupt.caught:
             where = f" (state at t = {self.t:.6g} s written to {self.output.dir})" if self.output else ""

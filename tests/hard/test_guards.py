@@ -77,3 +77,28 @@ def test_a_run_killed_by_a_signal_resumes_to_the_uninterrupted_state(tmp_path):
     for name in ("position", "velocity", "pressure", "density"):
         assert np.array_equal(a[name], b[name]), name
     assert [t for t, _ in read_series(out)] == [t for t, _ in read_series(tmp_path / "straight")]
+
+
+def test_a_guard_every_k_steps_names_the_steps_within_which_it_arose(tmp_path):
+    """run.guard_every = 5: the bad particle, set after step 28, is found at step 30 (the next
+    multiple of 5), and the message names steps 29-30 and how to pin the step down."""
+    sim = Simulation(build(small_layer(guard_every=5)), out_dir=tmp_path)
+    sim.run(max_steps=28)  # stops between frames: checked at 28 before its final frame
+    assert sim.last_guarded == 28
+    target = sim.state.field("density")
+    bad = target.to_numpy()
+    bad[7] = 1.0e4
+    target.from_numpy(bad)
+    with pytest.raises(SimulationError) as err:
+        sim.run()
+    text = str(err.value)
+    for words in ("after step 30", "particle 7 (block 'layer')", "density outside the plausible band",
+                  "checked every 5 steps: it arose within steps 29-30", "run.guard_every=1"):
+        assert words in text, (words, text)
+
+
+def test_guard_every_needs_the_step_guard():
+    from taichi_granular.config import ConfigError
+
+    with pytest.raises(ConfigError, match="run.guard_every"):
+        build(small_layer(guard="stage", guard_every=3))
