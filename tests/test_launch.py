@@ -65,15 +65,25 @@ def test_fast_path_taken_after_the_first_call_and_cached_per_object():
     np.testing.assert_allclose(sums.values.to_numpy(), 8.0 * np.linspace(0.5, 3.0, 8))
 
 
-def test_template_arguments_keep_taichis_path():
-    sums = Sums(5)
-    add = launcher(sums, "add_into")
-    assert add.setters is None
+def test_template_arguments_fixed_per_launcher_or_taichis_path():
+    sums, other = Sums(5), Sums(5)
+    add = launcher(sums, "add_into", sums.values)  # specialised for sums.values
+    assert launcher(sums, "add_into", other.values) is not add
     before = Launcher.launches
-    add(sums.values, 1.0)
-    add(sums.values, 1.0)
+    for _ in range(3):
+        add(1.0)
+    launcher(sums, "add_into", other.values)(0.5)
+    launcher(sums, "add_into", other.values)(0.5)
+    assert Launcher.launches == before + 3  # the first call of each through Taichi
+    np.testing.assert_allclose(sums.values.to_numpy(), np.linspace(0.5, 3.0, 5) + 3.0)
+    np.testing.assert_allclose(other.values.to_numpy(), np.linspace(0.5, 3.0, 5) + 1.0)
+    unbound = launcher(sums, "add_into")  # templates not given: every call through Taichi, as given
+    assert unbound.setters is None
+    before = Launcher.launches
+    unbound(sums.values, 1.0)
+    unbound(sums.values, 1.0)
     assert Launcher.launches == before
-    np.testing.assert_allclose(sums.values.to_numpy(), np.linspace(0.5, 3.0, 5) + 2.0)
+    np.testing.assert_allclose(sums.values.to_numpy(), np.linspace(0.5, 3.0, 5) + 5.0)
 
 
 def test_a_new_runtime_is_compiled_for_again():

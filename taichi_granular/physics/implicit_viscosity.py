@@ -44,6 +44,7 @@ ViscousSolveError with the residual and the iteration count, and the run stops (
 import taichi as ti
 
 from .. import runtime
+from ..launch import launcher
 from ..state import FieldSpec
 from .stage import Stage
 
@@ -175,7 +176,7 @@ class ImplicitViscosity(Stage):
 
     def _apply(self, dt: float, out) -> None:
         self.momentum.apply_viscous()
-        self._system_image(dt, out)
+        launcher(self, "_system_image", out)(dt)
 
     def run(self) -> None:
         """Solve (I - dt L) v = v* in place of the velocities (v* on entry); with Picard iterations,
@@ -186,15 +187,16 @@ class ImplicitViscosity(Stage):
         self.last_changes = []
         for iteration in range(self.picard_iterations):
             if iteration > 0:
-                self._keep()
-                self._to_midpoint()
+                launcher(self, "_keep")()
+                launcher(self, "_to_midpoint")()
                 for stage in self.refresh:
                     stage.run()
-                self._to_target()
+                launcher(self, "_to_target")()
             self._solve()
             if iteration > 0:  # how far the re-evaluated viscosity moved the solution, per |v*|
-                self._change()
-                change = (self._dot(self.kept, self.kept) / max(self._dot(self.target, self.target), 1e-300)) ** 0.5
+                launcher(self, "_change")()
+                kept_norm2 = launcher(self, "_dot", self.kept, self.kept)()
+                change = (kept_norm2 / max(launcher(self, "_dot", self.target, self.target)(), 1e-300)) ** 0.5
                 self.last_changes.append(change)
                 self.picard_change += change
                 self.run_picard_change = max(self.run_picard_change, change)
@@ -227,18 +229,18 @@ class ImplicitViscosity(Stage):
 
     def _solve(self) -> None:
         dt = float(self.time_step[None])
-        if self.momentum.max_implicit_viscosity() == 0.0:  # every grain within the explicit limit
-            self._nothing_to_solve()
+        if launcher(self.momentum, "max_implicit_viscosity")() == 0.0:  # every grain within the explicit limit
+            launcher(self, "_nothing_to_solve")()
             self.solves += 1
             self.run_solves += 1
             return
-        self.momentum.compute_diagonal()
-        self._begin(dt)
-        target_norm = self._dot(self.target, self.target) ** 0.5
+        launcher(self.momentum, "compute_diagonal")()
+        launcher(self, "_begin")(dt)
+        target_norm = launcher(self, "_dot", self.target, self.target)() ** 0.5
         self.momentum.apply_viscous()
-        self._first_residual(dt)
+        launcher(self, "_first_residual")(dt)
         goal = self.tolerance * target_norm
-        residual = self._dot(self.residual, self.residual) ** 0.5
+        residual = launcher(self, "_dot", self.residual, self.residual)() ** 0.5
         rho = alpha = omega = 1.0
         iterations = 0
         while residual > goal:
@@ -249,28 +251,28 @@ class ImplicitViscosity(Stage):
                     f"{self.max_iterations}, numerics.viscous_tolerance = {self.tolerance:g}; a smaller "
                     f"numerics.cfl shortens the step)")
             iterations += 1
-            rho_new = self._dot(self.shadow, self.residual)
+            rho_new = launcher(self, "_dot", self.shadow, self.residual)()
             if rho_new == 0.0 or omega == 0.0:  # breakdown: restart from the current iterate
                 self._restart(dt)
                 rho, alpha, omega = 1.0, 1.0, 1.0
                 continue
             beta = (rho_new / rho) * (alpha / omega)
-            self._new_direction(beta, omega)
+            launcher(self, "_new_direction")(beta, omega)
             self._apply(dt, self.v)
-            alpha = rho_new / self._dot(self.shadow, self.v)
-            self._update(alpha, self.v)  # x += alpha y, s = r - alpha v (s kept in r)
-            residual = self._dot(self.residual, self.residual) ** 0.5
+            alpha = rho_new / launcher(self, "_dot", self.shadow, self.v)()
+            launcher(self, "_update", self.v)(alpha)  # x += alpha y, s = r - alpha v (s kept in r)
+            residual = launcher(self, "_dot", self.residual, self.residual)() ** 0.5
             if residual <= goal:
                 break
-            self._precondition_residual()
+            launcher(self, "_precondition_residual")()
             self._apply(dt, self.t)
-            omega = self._dot(self.t, self.residual) / self._dot(self.t, self.t)
-            self._update(omega, self.t)  # x += omega z, r = s - omega t
-            residual = self._dot(self.residual, self.residual) ** 0.5
+            omega = launcher(self, "_dot", self.t, self.residual)() / launcher(self, "_dot", self.t, self.t)()
+            launcher(self, "_update", self.t)(omega)  # x += omega z, r = s - omega t
+            residual = launcher(self, "_dot", self.residual, self.residual)() ** 0.5
             rho = rho_new
-        self._copy_velocity_to_operand()
+        launcher(self, "_copy_velocity_to_operand")()
         self.momentum.apply_viscous()
-        self._end(dt)
+        launcher(self, "_end")(dt)
         self.iterations += iterations
         self.solves += 1
         self.run_iterations += iterations
@@ -290,9 +292,9 @@ class ImplicitViscosity(Stage):
 
     def _restart(self, dt: float) -> None:
         """Residual and shadow afresh from the current iterate (a BiCGSTAB breakdown)."""
-        self._copy_velocity_to_operand()
+        launcher(self, "_copy_velocity_to_operand")()
         self.momentum.apply_viscous()
-        self._first_residual(dt)
+        launcher(self, "_first_residual")(dt)
 
     def summary(self) -> str:
         """One line for ``run --profile``."""

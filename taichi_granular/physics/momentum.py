@@ -39,6 +39,7 @@ does not depend on v and stays in the rate.
 import taichi as ti
 
 from .. import runtime
+from ..launch import launcher
 
 from .stage import PairStage
 from .strain_rate import velocity_gradient_term
@@ -172,8 +173,11 @@ class ViscousMomentum(_Momentum):
         v_ij = self.walls.relative(self.operand, i, j, x_ij)
         acc += self.viscous_coefficient(i, j, k, v_ij, x_ij, r, 1) * self.gradient.pairwise(i, j, x_ij, r)
 
+    def _apply(self) -> None:
+        launcher(self, "_apply_pairs")()
+
     @ti.kernel
-    def _apply(self):
+    def _apply_pairs(self):
         ti.loop_config(serialize=runtime.serial_loops)
         for i in range(self.state.n_material):
             acc = ti.Vector.zero(float, self.dim)
@@ -262,8 +266,8 @@ class StressMomentum(_Momentum):
     def _apply(self) -> None:
         """Two passes: the operand's velocity gradient [M31], then the divergence of its viscous
         stress and the residual damping."""
-        self._operand_gradient()
-        self._apply_divergence()
+        launcher(self, "_operand_gradient")()
+        launcher(self, "_apply_divergence")()
 
 
 MOMENTUM = {"viscous_pair": ViscousMomentum, "stress_divergence": StressMomentum}
