@@ -1,6 +1,7 @@
 """The run loop: time stepping, output cadence, progress, guards."""
 from __future__ import annotations
 
+import collections
 import math
 import signal
 import sys
@@ -66,13 +67,30 @@ class RunSummary:
 
 
 class Progress:
-    """One status line on stderr: simulated time, steps/s, ETA (only on terminals, or forced)."""
+    """One status line on stderr: simulated time, steps/s, ETA (only on terminals, or forced).
+
+    The ETA extrapolates the simulated time's rate over the last WINDOW seconds of wall time, not
+    since the start: the first steps compile every kernel (a one-minute run's first estimate
+    read 12 hours), and a flow's time step changes as it speeds up or settles."""
+
+    WINDOW = 30.0  # s of wall time
 
     def __init__(self, end_time: float, enabled: bool):
         self.end_time = end_time
         self.enabled = enabled
         self.start = time.perf_counter()
         self.last = 0.0
+        self.samples = collections.deque()  # (wall, simulated time, step) of recent updates
+
+    def eta(self, now: float, t: float, step: int) -> float:
+        """Wall seconds left at the recent rate (NaN until two updates a while apart)."""
+        self.samples.append((now, t, step))
+        while len(self.samples) > 2 and now - self.samples[1][0] >= self.WINDOW:
+            self.samples.popleft()
+        wall0, t0, _ = self.samples[0]
+        if now - wall0 <= 0.0 or t <= t0:
+            return float("nan")
+        return (self.end_time - t) * (now - wall0) / (t - t0)
 
     def update(self, t: float, step: int, force: bool = False) -> None:
         if not self.enabled:
@@ -84,7 +102,7 @@ class Progress:
         elapsed = now - self.start
         rate = step / elapsed if elapsed > 0 else 0.0
         frac = min(1.0, t / self.end_time)
-        eta = elapsed * (1 - frac) / frac if frac > 0 else float("nan")
+        eta = self.eta(now, t, step)
         bar = "#" * int(30 * frac)
         eta_text = time.strftime("%H:%M:%S", time.gmtime(eta)) if math.isfinite(eta) else "--:--:--"
         sys.stderr.write(f"\r[{bar:<30}] t = {t:.4g}/{self.end_time:.4g} s  step {step}  "

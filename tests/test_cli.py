@@ -107,3 +107,18 @@ def test_validation_cases_are_picked_by_their_short_names():
     assert stems("mu_i", "collapse_a*.yaml", ["a0_90"]) == ["collapse_a0_90"]
     with pytest.raises(FileNotFoundError, match="known: collapse3d_a0_90_coarse"):
         stems("elastoplastic", "collapse3d_*_coarse.yaml", ["a9_99"])
+
+
+def test_progress_eta_follows_the_recent_rate_not_the_compile():
+    from taichi_granular.simulation import Progress
+
+    progress = Progress(end_time=10.0, enabled=False)
+    assert progress.eta(10.0, 0.01, 1) != progress.eta(10.0, 0.01, 1)  # NaN: nothing to extrapolate yet
+    # after 10 s of compilation, 0.01 simulated seconds per wall second
+    for k in range(1, 60):
+        eta = progress.eta(10.0 + k, 0.01 + 0.01 * k, k)
+    assert abs(eta - (10.0 - 0.6) / 0.01) < 1e-6  # the recent rate, not the one since the start (compile included)
+    for k in range(60, 101):  # the flow speeds up: twice the simulated time per wall second
+        t = 0.6 + 0.02 * (k - 59)
+        eta = progress.eta(10.0 + k, t, k)
+    assert abs(eta - (10.0 - t) / 0.02) < 1e-6  # the window holds the new rate only
