@@ -661,7 +661,7 @@ class Numerics:
         "lags by half a step)", 1, bounds="[1, 20]")
     neighbour_skin: float = _key(
         "Verlet-list skin as a fraction of h: each particle's neighbours within 2h + skin are listed and the "
-        "list rebuilt only when a particle has moved more than half the skin (neighbors.py; 0.3: 3D coarse collapse "
+        "list rebuilt only when a particle has moved more than half the skin (neighbours.py; 0.3: 3D coarse collapse "
         "1.5x, 2D 160k block 1.1-1.4x faster than scanning the cells, measured); 0 scans the cells in every pair "
         "loop", 0.3, "-", bounds="[0, 2]")
     reorder_every: int = _key(

@@ -11,7 +11,7 @@ import numpy as np
 import taichi as ti
 
 from . import runtime
-from .neighbors import NeighborGrid, NeighbourSearch, list_capacity
+from .neighbours import NeighbourGrid, NeighbourSearch, list_capacity
 from .integrators import INTEGRATORS, StableTimeStep
 from .launch import launcher
 from .physics.artificial_stress import ArtificialStress
@@ -121,7 +121,7 @@ class Scheme:
         self.smoothing = make_smoothing(scene.numerics.smoothing_function, scene.numerics.smoothing_length, scene.dimension)
         skin = scene.numerics.neighbour_skin * self.smoothing.h
         capacity = list_capacity(scene.dimension, self.smoothing.support + skin, scene.numerics.particle_spacing)
-        self.grid = NeighborGrid(self.state.position, scene.domain.lower, scene.domain.upper,
+        self.grid = NeighbourGrid(self.state.position, scene.domain.lower, scene.domain.upper,
                                  scene.domain.periodic_mask, self.smoothing.support, n_moving=ini.n_material,
                                  skin=skin, capacity=capacity if skin > 0.0 else 0)
         self.walls = walls_cls(self.state, scene.gravity_vector)

@@ -16,7 +16,7 @@ from . import runtime
 from .config import Scene
 from .diagnostics import Diagnostics, Guard
 from .output import RunOutput
-from .neighbors import NeighbourListOverflow
+from .neighbours import NeighbourListOverflow
 from .physics.implicit_viscosity import ViscousSolveError
 from .profiling import StageProfiler
 

@@ -1,5 +1,5 @@
 """One neighbour pass for several pair stages (physics/stage.py FusedPairs) and the Verlet list
-(neighbors.py): a fixed-step run of a small collapsing column gives the velocities of one pass per
+(neighbours.py): a fixed-step run of a small collapsing column gives the velocities of one pass per
 stage and of the plain cell scan, to round-off."""
 import numpy as np
 

@@ -114,7 +114,7 @@ class DensitySweep:
         ti.loop_config(serialize=runtime.serial_loops)
         for i in range(self.state.n_material):
             acc = ti.Vector([self.state.mass[i] * self.w.value(0.0)])
-            self.grid.for_each_neighbor(i, self._pair, acc)
+            self.grid.for_each_neighbour(i, self._pair, acc)
             self.out[i] = acc[0]
 
 

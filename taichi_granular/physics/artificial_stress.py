@@ -83,7 +83,7 @@ class ArtificialStress(Stage):
         ti.loop_config(serialize=runtime.serial_loops)
         for i in range(self.state.n_material):
             acc = ti.Vector.zero(float, self.dim)
-            self.grid.for_each_neighbor(i, self.pair, acc)
+            self.grid.for_each_neighbour(i, self.pair, acc)
             self.state.acceleration[i] += acc
 
     def run(self) -> None:

@@ -136,7 +136,7 @@ class _Momentum(PairStage):
         ti.loop_config(serialize=runtime.serial_loops)
         for i in range(self.state.n_material):
             block = ti.Matrix.zero(float, self.dim, self.dim)
-            self.grid.for_each_neighbor(i, self.diagonal_pair, block)
+            self.grid.for_each_neighbour(i, self.diagonal_pair, block)
             self.diagonal[i] = block
 
     @ti.kernel
@@ -181,7 +181,7 @@ class ViscousMomentum(_Momentum):
         ti.loop_config(serialize=runtime.serial_loops)
         for i in range(self.state.n_material):
             acc = ti.Vector.zero(float, self.dim)
-            self.grid.for_each_neighbor(i, self.viscous_pair, acc)
+            self.grid.for_each_neighbour(i, self.viscous_pair, acc)
             self.image[i] = acc
 
 
@@ -252,7 +252,7 @@ class StressMomentum(_Momentum):
         ti.loop_config(serialize=runtime.serial_loops)
         for i in range(self.state.n_material):
             gradient = ti.Matrix.zero(float, self.dim, self.dim)
-            self.grid.for_each_neighbor(i, self.operand_gradient_pair, gradient)
+            self.grid.for_each_neighbour(i, self.operand_gradient_pair, gradient)
             self.operand_gradient[i] = gradient
 
     @ti.kernel
@@ -260,7 +260,7 @@ class StressMomentum(_Momentum):
         ti.loop_config(serialize=runtime.serial_loops)
         for i in range(self.state.n_material):
             acc = ti.Vector.zero(float, self.dim)
-            self.grid.for_each_neighbor(i, self.viscous_pair, acc)
+            self.grid.for_each_neighbour(i, self.viscous_pair, acc)
             self.image[i] = acc
 
     def _apply(self) -> None:

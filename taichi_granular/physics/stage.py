@@ -71,7 +71,7 @@ class PairStage(Stage):
         ti.loop_config(serialize=runtime.serial_loops)
         for i in range(self.state.n_material):
             acc = self.initial(i)
-            self.grid.for_each_neighbor(i, self.pair, acc)
+            self.grid.for_each_neighbour(i, self.pair, acc)
             self.store(i, acc)
 
 
@@ -137,14 +137,14 @@ class FusedPairs(Stage):
             if ti.static(len(m) == 2):
                 a0 = m[0].initial(i)
                 a1 = m[1].initial(i)
-                self.grid.for_each_neighbor(i, self.pair, ti.static((a0, a1)))
+                self.grid.for_each_neighbour(i, self.pair, ti.static((a0, a1)))
                 m[0].store(i, a0)
                 m[1].store(i, a1)
             elif ti.static(len(m) == 3):
                 a0 = m[0].initial(i)
                 a1 = m[1].initial(i)
                 a2 = m[2].initial(i)
-                self.grid.for_each_neighbor(i, self.pair, ti.static((a0, a1, a2)))
+                self.grid.for_each_neighbour(i, self.pair, ti.static((a0, a1, a2)))
                 m[0].store(i, a0)
                 m[1].store(i, a1)
                 m[2].store(i, a2)
@@ -153,7 +153,7 @@ class FusedPairs(Stage):
                 a1 = m[1].initial(i)
                 a2 = m[2].initial(i)
                 a3 = m[3].initial(i)
-                self.grid.for_each_neighbor(i, self.pair, ti.static((a0, a1, a2, a3)))
+                self.grid.for_each_neighbour(i, self.pair, ti.static((a0, a1, a2, a3)))
                 m[0].store(i, a0)
                 m[1].store(i, a1)
                 m[2].store(i, a2)

@@ -52,5 +52,5 @@ class StressDiffusion(Stage):
         ti.loop_config(serialize=runtime.serial_loops)
         for i in range(self.state.n_material):
             laplacian = ti.Matrix.zero(float, self.dim, self.dim)
-            self.grid.for_each_neighbor(i, self.pair, laplacian)
+            self.grid.for_each_neighbour(i, self.pair, laplacian)
             self.stress_rate[i] += self.coefficient * laplacian

@@ -106,7 +106,7 @@ class WallContinuity(Stage):
         for w in range(self.state.n_wall):
             j = self.state.n_material + w
             rate = 0.0
-            self.grid.for_each_material_neighbor(j, self.pair, rate)
+            self.grid.for_each_material_neighbour(j, self.pair, rate)
             self.state.density_rate[j] = rate
 
 

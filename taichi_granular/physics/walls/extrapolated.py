@@ -115,7 +115,7 @@ class WallVelocityExtrapolation(Stage):
         for k in range(self.state.n_wall):
             w = self.state.n_material + k
             acc = ti.Vector.zero(float, self.dim + 1)
-            self.grid.for_each_material_neighbor(w, self.pair, acc)
+            self.grid.for_each_material_neighbour(w, self.pair, acc)
             v = self.state.wall_velocity[k]
             if acc[self.dim] > 0.0:
                 mean = ti.Vector([acc[a] for a in ti.static(range(self.dim))]) / acc[self.dim]
@@ -156,7 +156,7 @@ class WallStressExtrapolation(Stage):
         for k in range(self.state.n_wall):
             w = self.state.n_material + k
             acc = ti.Matrix.zero(float, self.dim + 1, max(self.dim, 2))
-            self.grid.for_each_material_neighbor(w, self.pair, acc)
+            self.grid.for_each_material_neighbour(w, self.pair, acc)
             sigma = ti.Matrix.zero(float, self.dim, self.dim)
             density = self.reference_density
             if acc[self.dim, 0] > 0.0:

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 import taichi as ti
 
-from taichi_granular.neighbors import NeighborGrid
+from taichi_granular.neighbours import NeighbourGrid
 
 
 def brute_force(points, lower, upper, periodic, support):
@@ -23,7 +23,7 @@ def grid_neighbours(points, lower, upper, periodic, support, n_moving=None, mate
     n, dim = points.shape
     if grid is None:
         x = ti.Vector.field(dim, float, n)
-        grid = NeighborGrid(x, lower, upper, periodic, support, n_moving=n_moving, **list_options)
+        grid = NeighbourGrid(x, lower, upper, periodic, support, n_moving=n_moving, **list_options)
     grid.position.from_numpy(points)
     count = ti.field(ti.i32, n)
     id_sum = ti.field(ti.i64, n)
@@ -42,9 +42,9 @@ def grid_neighbours(points, lower, upper, periodic, support, n_moving=None, mate
             for i in range(n):
                 acc = ti.Vector([0, 0, 0], ti.i64)
                 if ti.static(material_only):
-                    grid.for_each_material_neighbor(i, self.task, acc)
+                    grid.for_each_material_neighbour(i, self.task, acc)
                 else:
-                    grid.for_each_neighbor(i, self.task, acc)
+                    grid.for_each_neighbour(i, self.task, acc)
                 count[i] = ti.cast(acc[0], ti.i32)
                 id_sum[i] = acc[1]
                 order_hash[i] = acc[2]
@@ -147,7 +147,7 @@ def test_verlet_list_finds_the_cell_scan_neighbours(dim, periodic):
 
 
 def test_verlet_list_overflow_names_the_particle():
-    from taichi_granular.neighbors import NeighbourListOverflow
+    from taichi_granular.neighbours import NeighbourListOverflow
 
     points = np.full((30, 2), 0.1) + np.linspace(0.0, 1e-3, 30)[:, None]  # a clump
     with pytest.raises(NeighbourListOverflow, match=r"particle \d+ has 29 particles .* more than the 10"):
@@ -160,7 +160,7 @@ def test_rebuild_moves_only_the_material():
     points = np.array([[0.05, 0.05], [0.25, 0.15], [0.07, 0.05], [0.26, 0.15]])
     x = ti.Vector.field(2, float, 4)
     x.from_numpy(points)
-    grid = NeighborGrid(x, (0.0, 0.0), (0.31, 0.2), (False, False), 0.05, n_moving=2)
+    grid = NeighbourGrid(x, (0.0, 0.0), (0.31, 0.2), (False, False), 0.05, n_moving=2)
     count = ti.field(ti.i32, 4)
 
     @ti.data_oriented
@@ -173,7 +173,7 @@ def test_rebuild_moves_only_the_material():
         def run(self):
             for i in range(4):
                 acc = 0
-                grid.for_each_neighbor(i, self.task, acc)
+                grid.for_each_neighbour(i, self.task, acc)
                 count[i] = acc
 
     grid.build()

@@ -6,9 +6,9 @@ built-in parallel scan does not run on the CPU backend) -> scatter -> each cell'
 by particle id. The last step makes the order of every pair sum, and hence every result,
 independent of thread scheduling: runs are bitwise reproducible on the CPU. The material is
 rebinned at every build; boundary particles, which never move, are binned once into a second
-cell list (see :class:`NeighborGrid`).
+cell list (see :class:`NeighbourGrid`).
 
-Every pair loop in the package goes through :meth:`NeighborGrid.for_each_neighbor`, which
+Every pair loop in the package goes through :meth:`NeighbourGrid.for_each_neighbour`, which
 hands ``task(i, j, x_ij, r, acc)`` the minimum-image displacement x_ij = x_i - x_j.
 
 With a skin (``numerics.neighbour_skin`` > 0, a Verlet list), the cells are at least
@@ -20,7 +20,7 @@ than half the skin since the last build (two particles closing on each other by 
 is then the most that can have happened), so between rebuilds no pair within the support is
 missed and the sums are those of the cell scan (round-off apart: ascending ids, not cell by cell;
 tested), whenever the list was built, so a resumed run is bitwise the uninterrupted one. A boundary particle's row holds its material neighbours only: the one pair loop over
-boundary particles, :meth:`for_each_material_neighbor`, needs no more, and a wall particle with
+boundary particles, :meth:`for_each_material_neighbour`, needs no more, and a wall particle with
 no material in reach then does no pair work at all.
 """
 
@@ -48,7 +48,7 @@ def list_capacity(dim: int, reach: float, spacing: float) -> int:
 
 
 @ti.data_oriented
-class NeighborGrid:
+class NeighbourGrid:
     """Cells over the domain box; ``build()`` bins the current positions.
 
     Parameters: ``position`` field (all particles, walls included), domain ``lower`` and
@@ -355,7 +355,7 @@ class NeighborGrid:
     # ---- the neighbour loop -------------------------------------------------------------------
 
     @ti.func
-    def for_each_neighbor(self, i, task: ti.template(), acc: ti.template()):
+    def for_each_neighbour(self, i, task: ti.template(), acc: ti.template()):
         """Call ``task(i, j, x_ij, r, acc)`` for every j != i with r = |x_ij| < support (i a
         material particle: with a Verlet list a boundary particle's row holds material only)."""
         if ti.static(self.verlet):
@@ -364,8 +364,8 @@ class NeighborGrid:
             self._scan(i, task, acc, self.lists, self.support)
 
     @ti.func
-    def for_each_material_neighbor(self, i, task: ti.template(), acc: ti.template()):
-        """As :meth:`for_each_neighbor`, over the rebinned particles j < n_moving only (a
+    def for_each_material_neighbour(self, i, task: ti.template(), acc: ti.template()):
+        """As :meth:`for_each_neighbour`, over the rebinned particles j < n_moving only (a
         boundary particle's continuity sees only the material moving past it [A11])."""
         if ti.static(self.verlet):
             self._visit_list(i, task, acc, True)
