@@ -1,4 +1,4 @@
-"""``taichi-granular``: run | describe | validate | bench (thin: parsing and printing only)."""
+"""The ``taichi-granular`` command: parsing and printing only; the work is in the modules it calls."""
 from __future__ import annotations
 
 import argparse
@@ -7,6 +7,16 @@ import traceback
 from pathlib import Path
 
 from .config import ConfigError, load_scene
+
+DESCRIPTION = """Dense granular flows with SPH in Taichi: run a YAML scene (frames, VTU particle files,
+diagnostics), resume it from its checkpoint, describe what it will compute, re-render its frames,
+run the validation cases and the benchmarks. A scene is a file path, or the name of a bundled
+scene such as mu_i/collapse_a0_90.yaml."""
+
+EPILOG = """exit codes: 0 done; 2 a scene or input error (the message names the key); 3 a run stopped by
+a guard (NaN, a particle outside the domain, a failed solve: its failure.npz written); 130
+interrupted (the state at that step written); 1 an internal error (a bug: please report it with
+--debug's traceback)."""
 
 
 def _default_out(scene) -> Path:
@@ -120,13 +130,13 @@ def cmd_bench(args) -> int:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="taichi-granular", description=__doc__)
+    parser = argparse.ArgumentParser(prog="taichi-granular", description=DESCRIPTION, epilog=EPILOG)
     common = argparse.ArgumentParser(add_help=False)
     common.add_argument("--debug", action="store_true", help="print the traceback of an error")
     sub = parser.add_subparsers(dest="command", required=True)
 
     def scene_args(p):
-        p.add_argument("scene", help="YAML scene file")
+        p.add_argument("scene", help="YAML scene file, or a bundled scene's name (e.g. mu_i/inclined_plane.yaml)")
         p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                        help="override a scene key, e.g. --set numerics.cfl=0.3 (repeatable)")
 
@@ -146,7 +156,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=cmd_resume)
 
-    p = sub.add_parser("describe", parents=[common], help="stage list, fields and memory, time step; runs nothing")
+    p = sub.add_parser("describe", parents=[common], help="stage list, fields and memory, the stable time step and Mach estimate (evaluates the "
+                                                          "rates once at t = 0; takes no step, writes nothing)")
     scene_args(p)
     p.set_defaults(func=cmd_describe)
 
@@ -169,7 +180,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=cmd_render)
 
     p = sub.add_parser("validate", parents=[common], help="run a validation case and print its errors")
-    p.add_argument("case", choices=["inclined-plane", "column-collapse", "column-collapse-3d", "pile-collapse",
+    p.add_argument("case", help="the validation case", choices=["inclined-plane", "column-collapse", "column-collapse-3d", "pile-collapse",
                                     "stake-rows", "obstacle-flow", "element-tests", "drum"])
     p.add_argument("--resolution", choices=["coarse", "paper"], default="coarse",
                    help="column-collapse-3d, stake-rows, obstacle-flow: the coarse CPU scenes or the paper's "
@@ -219,8 +230,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--no-readme", action="store_true", help="accuracy: do not rewrite the README's study section")
     p.add_argument("--reuse", action="store_true",
                    help="accuracy: keep the runs that succeeded in the output folder's accuracy.csv, run the rest")
-    p.add_argument("--arch", default="cpu")
-    p.add_argument("--precision", default="f64", choices=["f32", "f64"])
+    p.add_argument("--arch", default="cpu", help="throughput: Taichi backend (cpu, cuda, vulkan)")
+    p.add_argument("--precision", default="f64", choices=["f32", "f64"], help="throughput: floating-point precision")
     p.set_defaults(func=cmd_bench)
     return parser
 

@@ -1155,8 +1155,13 @@ def scene_from_dict(data: Any, name: str = "scene") -> Scene:
 
 
 def load_scene(path: Union[str, Path], overrides: typing.Iterable[str] = ()) -> Scene:
-    """Read and validate a YAML scene file; ``overrides`` are ``dotted.key=value`` strings."""
+    """Read and validate a YAML scene file; ``overrides`` are ``dotted.key=value`` strings. A path
+    that does not exist but names a bundled scene (``mu_i/inclined_plane.yaml``, paths.py) reads that."""
+    from .paths import bundled
+
     path = Path(path)
+    if not path.exists():
+        path = bundled(path) or path
     try:
         text = path.read_text()
     except (OSError, UnicodeDecodeError) as err:

@@ -122,3 +122,19 @@ def test_progress_eta_follows_the_recent_rate_not_the_compile():
         t = 0.6 + 0.02 * (k - 59)
         eta = progress.eta(10.0 + k, t, k)
     assert abs(eta - (10.0 - t) / 0.02) < 1e-6  # the window holds the new rate only
+
+
+def test_every_command_and_option_has_help():
+    import argparse
+
+    from taichi_granular.cli import build_parser
+
+    parser = build_parser()
+    commands = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    helped = {choice.dest for choice in commands._choices_actions if choice.help}
+    assert helped == set(commands.choices)  # every command listed with a line in the top-level help
+    for name, sub in commands.choices.items():
+        for action in sub._actions:
+            if isinstance(action, argparse._HelpAction):
+                continue
+            assert action.help and action.help != argparse.SUPPRESS, (name, action.dest)

@@ -507,14 +507,16 @@ def study(cases: Sequence[Case], out: Path, title: str, timeout: float = 3600.0,
 
 
 def main(args) -> int:
-    from ..paths import REPO
+    from ..paths import REPO, SOURCE_CHECKOUT
 
     cases = QUICK if args.quick else FULL
     if args.cases:
         cases = tuple(c for c in cases if any(key in c.name for key in args.cases))
-    default = Path("output/bench/accuracy_quick") if args.quick else REPO / "renders" / "accuracy"
+    # the repository's renders/ and README only in a source checkout (never inside an installed package)
+    default = (Path("output/bench/accuracy_quick") if args.quick else
+               REPO / "renders" / "accuracy" if SOURCE_CHECKOUT else Path("output/bench/accuracy"))
     out = Path(args.out) if args.out else default
-    whole = not args.quick and not args.cases and not args.no_readme
+    whole = SOURCE_CHECKOUT and not args.quick and not args.cases and not args.no_readme
     runs, paths = study(cases, out, "Quick study" if args.quick else "Full study", args.timeout,
                         REPO / "README.md" if whole else None, reuse=args.reuse)
     print(paths["md"].read_text())
