@@ -116,6 +116,20 @@ def cmd_validate(args) -> int:
     raise AssertionError(args.case)
 
 
+def cmd_keys(args) -> int:
+    from .keyref import key_reference
+
+    text = key_reference()
+    if args.out:
+        from .output import atomic_write_text
+        Path(args.out).parent.mkdir(parents=True, exist_ok=True)
+        atomic_write_text(Path(args.out), text)
+        print(f"scene-key reference -> {args.out}")
+    else:
+        sys.stdout.write(text)
+    return 0
+
+
 def cmd_bench(args) -> int:
     if args.study == "throughput":
         from .bench.throughput import main as throughput
@@ -197,6 +211,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=cmd_validate)
 
+    p = sub.add_parser("keys", parents=[common], help="the reference of every scene key (meaning, unit, default, "
+                                                      "bounds) as Markdown, from the declarations the loader checks")
+    p.add_argument("--out", help="write it to this file (docs/reference/keys.md) instead of printing it")
+    p.set_defaults(func=cmd_keys)
+
     p = sub.add_parser("bench", parents=[common], help="benchmarks (timing lives here, never in tests)")
     p.add_argument("study", choices=["throughput", "accuracy", "viscosity"],
                    help="throughput: particle-steps/s by size; accuracy: error against cost over resolution "
@@ -217,7 +236,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--orders", nargs="+", choices=["lattice", "shuffled", "reordered"],
                    help="throughput: particle orders measured side by side (shuffled: a random order left so; "
                         "reordered: the same, sorted by cell once)")
-    p.add_argument("--quick", action="store_true", help="accuracy: the few-minute sweep (never rewrites the README)")
+    p.add_argument("--quick", action="store_true", help="accuracy: the few-minute sweep (never rewrites docs/accuracy.md)")
     p.add_argument("--cases", nargs="+", help="accuracy, viscosity: only cases whose name contains one of these")
     p.add_argument("--window", type=float, default=0.01, help="viscosity: simulated seconds timed from release")
     p.add_argument("--cfls", type=float, nargs="+",
@@ -227,7 +246,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out",
                    help="accuracy: output folder (default renders/accuracy, quick: output/bench/accuracy_quick)")
     p.add_argument("--timeout", type=float, default=3600.0, help="accuracy: seconds allowed per run")
-    p.add_argument("--no-readme", action="store_true", help="accuracy: do not rewrite the README's study section")
+    p.add_argument("--no-readme", action="store_true", help="accuracy: do not rewrite the study section of docs/accuracy.md")
     p.add_argument("--reuse", action="store_true",
                    help="accuracy: keep the runs that succeeded in the output folder's accuracy.csv, run the rest")
     p.add_argument("--arch", default="cpu", help="throughput: Taichi backend (cpu, cuda, vulkan)")

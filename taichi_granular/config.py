@@ -648,7 +648,7 @@ class Numerics:
         "mu(I) viscous term: explicit (the step obeys the viscous limit of [M39]) or implicit (the viscosity above "
         "that limit solved by backward Euler, BiCGSTAB, each step: only the acoustic limit sets the step, 90-270x "
         "fewer steps on the collapses; physics/implicit_viscosity.py). Explicit stays the default until the "
-        "implicit run-outs of the tall columns match it (README, implicit viscosity)", "explicit")
+        "implicit run-outs of the tall columns match it (docs, implicit viscosity)", "explicit")
     viscous_tolerance: float = _key(
         "implicit viscosity: the solve stops when |residual| <= this x |v*| (the velocities before the viscous "
         "update; against 1e-6, 1e-4 moves the velocities of a collapse by 5e-4 of their largest, measured)",

@@ -20,7 +20,7 @@ with the sound speed, so stiffer grains alone would also shift the particles fas
 therefore divides numerics.particle_shifting.coefficient by the same factor, so that the change
 of compressibility changes nothing else. Measured on the Table 2 plane with K_t 20x stiffer
 (c 4.5x faster) and zeta left at 0.2: the layer never settled, 37.6 % above [M56] at 55-60 s and
-still accelerating; with zeta / 4.5 as well it settled (README, inclined plane).
+still accelerating; with zeta / 4.5 as well it settled (docs, inclined plane).
 """
 from __future__ import annotations
 

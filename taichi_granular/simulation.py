@@ -204,7 +204,7 @@ class Simulation:
                 if self.frame_index == 0:  # the first frame comes before the first step
                     check_colour_field(self.scene.render.colour_by, arrays)
                 image = self.renderer.image(arrays, self.state.n_material, self.t)
-                write_png(self.output.dir / "frames" / png_name(self.frame_index), image)
+                write_png(self.output.dir / "frames" / png_name(self.frame_index, self.t), image)
         self.frame_index += 1
 
     def _warn_mach(self, diag: dict) -> None:

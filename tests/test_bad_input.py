@@ -196,7 +196,7 @@ def test_max_steps_stop_writes_final_frame_diagnostics_and_checkpoint(tmp_path, 
     assert [int(r["step"]) for r in rows] == [0, 3]
     assert np.isfinite(float(rows[-1]["t"])) and float(rows[-1]["t"]) > 0.0
     assert read_checkpoint(out)[1]["step"] == 3
-    assert (out / "frames" / "frame_000001.png").exists()
+    assert len(list((out / "frames").glob("frame_000001_t*s.png"))) == 1
 
 
 @pytest.mark.parametrize("text, key", [

@@ -89,7 +89,7 @@ def test_coarse_collapse_spreads_towards_the_lube_runout():
     collapses without NaN or escaping particles and its front stops within 30 % of the Lube
     run-out (measured: stops at 0.35 s, -24.0 %; -31.3 % with density diffusion delta = 0.02.
     Afterwards the regularised viscosity lets the deposit creep at ~(tau/tau_y)/m_0, 3.5 mm/s
-    here; see README)."""
+    here; see docs)."""
     scene = load_scene(config_path("mu_i/collapse_a0_90.yaml"),
                        ["numerics.particle_spacing=0.009", "run.end_time=0.5", "run.output_interval=0.05"])
     times, frames, diagnostics = run_frames(scene, 0.05)

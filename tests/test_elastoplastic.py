@@ -217,7 +217,7 @@ def test_small_3d_collapse_runs_to_rest_near_the_lube_runout():
     config's Coulomb floor (delta = phi): it comes to rest (kinetic energy below 1e-3 of its
     peak) within 0.6 s with no NaN and no particle escaping, and its run-out stays where this
     resolution puts it: measured -32.6 % of the Lube scaling (front stops at 0.30 s). The
-    shortfall shrinks as dp falls (-26.0 % at r0/dp = 10, -19.1 % at r0/dp = 13, README), so
+    shortfall shrinks as dp falls (-26.0 % at r0/dp = 10, -19.1 % at r0/dp = 13, docs), so
     the band below catches a change of physics either way. The full coarse case (r0 = 0.1 m)
     is `taichi-granular validate column-collapse-3d`."""
     from scenes import run_frames
@@ -242,7 +242,7 @@ def test_youngs_modulus_acts_on_a_collapse_only_through_the_artificial_viscosity
     a granular flow, not its elastic strains. The 6 cm column of the test above, after 0.3 s:
     E = 5 MPa with alpha = 2 and E = 1.25 MPa with alpha = 4 (the same alpha c) put the front
     (95th percentile radius) within 0.6 mm of each other, E = 1.25 MPa with alpha = 2 (half the
-    alpha c) 2.4 mm further out; measured 91.0 / 91.6 / 93.4 mm. (Measured at rest, README:
+    alpha c) 2.4 mm further out; measured 91.0 / 91.6 / 93.4 mm. (Measured at rest, docs:
     -50.9 % of Lube both at E = 150 MPa, alpha = 1 and at E = 5 MPa, alpha = 5.48; -32.6 % at
     E = 5 MPa, alpha = 1.)"""
     def front(youngs_modulus, alpha):

@@ -37,7 +37,7 @@ def test_momentum_is_conserved_to_round_off_in_a_periodic_box(viscosity, steps):
     ``particle_shifting.conserve_momentum``: pairwise forces (pressure, viscous, artificial
     viscosity) and the particle shift (its Taylor velocity correction less its mean) change total
     momentum only by round-off over 10^4 Verlet steps: 6e-16 of |p| measured, against 4.3e-3 with
-    the plain Taylor term, the default (README: it keeps sheared layers right). The implicit viscous update too
+    the plain Taylor term, the default (docs: it keeps sheared layers right). The implicit viscous update too
     (its velocities are v* + dt L x, pair sums; with v = x, the solution to its tolerance, the
     residual drifted p by 6e-5 of sum m|v| in 10^4 steps, measured)."""
     data = layer(height=0.06, length=0.06, alpha=0.05)

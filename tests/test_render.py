@@ -112,7 +112,8 @@ def test_render_command_rerenders_a_run(tmp_path):
     data["run"] = {"end_time": 0.002, "output_interval": 0.001}
     out = tmp_path / "run"
     Simulation(build(data), out_dir=out).run()
-    assert len(list((out / "frames").glob("frame_*.png"))) == 3
+    names = sorted(p.name for p in (out / "frames").glob("frame_*.png"))
+    assert names == ["frame_000000_t0s.png", "frame_000001_t0.001s.png", "frame_000002_t0.002s.png"]
     gif = tmp_path / "p.gif"
     assert main(["render", str(out), "--colour-by", "pressure", "--width", "200", "--video", str(gif)]) == 0
     assert len(list((out / "frames_pressure").glob("frame_*.png"))) == 3
@@ -136,3 +137,16 @@ def test_a_top_view_camera_shows_x_to_the_right(tmp_path):
     row = image[150]
     yellow = np.nonzero((row[:, 0] > 150) & (row[:, 1] > 150) & (row[:, 2] < 120))[0]  # viridis(1), speed 1
     assert len(yellow) and yellow.mean() > 200, yellow
+
+
+def test_charts_are_drawn_headless():
+    """render/plot.py draws with matplotlib's Agg backend (no display): an image of the asked size
+    with the reference line and the measured points in it."""
+    from taichi_granular.render.plot import plot_pareto, plot_points_and_curve
+
+    x = np.linspace(0.0, 1.0, 20)
+    image = plot_points_and_curve([(0.5, 0.3)], (x, x**2), "x [m]", "y [m]", "check", size=(320, 240))
+    assert image.shape == (240, 320, 3) and image.dtype == np.uint8
+    assert (image < 128).any() and (image > 250).mean() > 0.5  # ink on a mostly white page
+    pareto = plot_pareto([("a", [(1.0, 0.1), (10.0, 0.01)], [0, 1])], "wall [s]", "error", "front", size=(400, 300))
+    assert pareto.shape == (300, 400, 3)

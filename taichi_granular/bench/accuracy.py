@@ -22,8 +22,8 @@ separately profiled stretch of steps after the run (profiling synchronises aroun
 
 Outputs (``--out``): ``accuracy.csv`` (every run), ``accuracy.png`` (error against wall time,
 log-log, one colour per case, each case's Pareto front filled and joined) and ``accuracy.md``
-(the tables the README includes between its ``accuracy-study`` markers; the full study rewrites
-that part of the README, ``--quick`` never does).
+(the tables docs/accuracy.md includes between its ``accuracy-study`` markers; the full study rewrites
+that part of docs/accuracy.md, ``--quick`` never does).
 """
 from __future__ import annotations
 
@@ -518,7 +518,7 @@ def main(args) -> int:
     out = Path(args.out) if args.out else default
     whole = SOURCE_CHECKOUT and not args.quick and not args.cases and not args.no_readme
     runs, paths = study(cases, out, "Quick study" if args.quick else "Full study", args.timeout,
-                        REPO / "README.md" if whole else None, reuse=args.reuse)
+                        REPO / "docs" / "accuracy.md" if whole else None, reuse=args.reuse)
     print(paths["md"].read_text())
     print("outputs: " + ", ".join(str(p) for p in paths.values() if p.exists()))
     return 0 if all(r.ok for r in runs) else 1

@@ -39,7 +39,7 @@ def render_output(args) -> int:
         if not written:
             check_colour_field(settings.colour_by, arrays, "--colour-by")
         n_material = int((arrays["is_wall"] == 0).sum())
-        written.append(target / png_name(index))
+        written.append(target / png_name(index, t))
         write_png(written[-1], renderer.image(arrays, n_material, t))
     print(f"{len(written)} frames -> {target}")
     if args.video:

@@ -51,8 +51,10 @@ def check_colour_field(name: str, arrays: Dict[str, np.ndarray], path: str = "re
         raise ConfigError(path, f"no particle field '{name}'; {hint}this scene has: {', '.join(fields)}")
 
 
-def png_name(index: int) -> str:
-    return f"frame_{index:06d}.png"
+def png_name(index: int, t: float) -> str:
+    """``frame_000012_t0.12s.png``: the frame number keeps the files in order, the simulated time
+    [s] says which moment it shows."""
+    return f"frame_{index:06d}_t{t:.6g}s.png"
 
 
 class Renderer:

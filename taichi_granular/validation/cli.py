@@ -142,7 +142,7 @@ def validate_column_collapse(args) -> int:
     else:
         print("run-out read when the front stops (from then on it never runs ahead faster than "
               f"{100 * cc.FRONT_STOP_FRACTION:.0f} % of its peak speed); afterwards the regularised viscosity lets the "
-              "deposit creep at the speed shown (README, column collapse)")
+              "deposit creep at the speed shown (docs, column collapse)")
     print(f"acceptance (run-out within {100 * bound:.0f} % of Lube for a <= 3, at rest, none escaped): "
           f"{'PASS' if ok else 'FAIL'}; {base / 'runout.csv'}, {base / 'runout.png'}")
     return 0 if ok else 1

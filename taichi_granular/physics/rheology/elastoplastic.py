@@ -137,7 +137,7 @@ class ElastoplasticMohrCoulomb:
         """sqrt((K + 4G/3)/rho_0), the longitudinal elastic wave speed: the c of the artificial
         viscosity [A16-19]  [m/s]. Since alpha c then grows as sqrt(E), E steers a flow through
         the viscosity, not through the elastic strains: a scene that lowers E raises alpha by
-        sqrt(E_paper/E) (README, lowering E; the sound speed of K alone was measured worse)."""
+        sqrt(E_paper/E) (docs, lowering E; the sound speed of K alone was measured worse)."""
         return self.wave_speed
 
     @ti.func
