@@ -116,15 +116,15 @@ def cmd_validate(args) -> int:
     raise AssertionError(args.case)
 
 
-def cmd_keys(args) -> int:
-    from .keyref import key_reference
+def cmd_reference(args) -> int:
+    from .reference import REFERENCES
 
-    text = key_reference()
+    text = REFERENCES[args.page]()
     if args.out:
         from .output import atomic_write_text
         Path(args.out).parent.mkdir(parents=True, exist_ok=True)
         atomic_write_text(Path(args.out), text)
-        print(f"scene-key reference -> {args.out}")
+        print(f"{args.page} reference -> {args.out}")
     else:
         sys.stdout.write(text)
     return 0
@@ -211,10 +211,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=cmd_validate)
 
-    p = sub.add_parser("keys", parents=[common], help="the reference of every scene key (meaning, unit, default, "
-                                                      "bounds) as Markdown, from the declarations the loader checks")
-    p.add_argument("--out", help="write it to this file (docs/reference/keys.md) instead of printing it")
-    p.set_defaults(func=cmd_keys)
+    p = sub.add_parser("reference", parents=[common],
+                       help="a generated reference page as Markdown: every scene key (meaning, unit, default, bounds, "
+                            "from the declarations the loader checks) or every output field and column")
+    p.add_argument("page", choices=["keys", "outputs"], help="keys: the scene keys; outputs: VTU fields, diagnostics.csv")
+    p.add_argument("--out", help="write it to this file (docs/reference/PAGE.md) instead of printing it")
+    p.set_defaults(func=cmd_reference)
 
     p = sub.add_parser("bench", parents=[common], help="benchmarks (timing lives here, never in tests)")
     p.add_argument("study", choices=["throughput", "accuracy", "viscosity"],

@@ -24,10 +24,22 @@ import numpy as np
 
 from .config import Scene, dump_scene
 
+# diagnostics.csv, one row per frame: column -> (unit, meaning); the optional ones only where the
+# scene has what they measure (docs/reference/outputs.md is generated from these)
+DIAGNOSTIC_MEANINGS = {
+    "t": ("s", "simulated time of the frame"),
+    "step": ("-", "time steps taken"),
+    "dt": ("s", "the stable time step after this frame's step"),
+    "kinetic_energy": ("J (J/m in 2D)", "kinetic energy of the material"),
+    "max_speed": ("m/s", "largest particle speed"),
+    "max_density_error": ("-", "largest |rho/rho_ref - 1| of the model (the weakly compressible error)"),
+    "mach": ("-", "max_speed over the model's reference sound speed (run.mach_warning)"),
+    "outflow": ("-", "particles that left by an open face (domain.outflow)"),
+    "viscous_iterations": ("-", "mean BiCGSTAB iterations per step of the implicit viscous solve since the previous "
+                                "row (numerics.viscosity: implicit)"),
+    "viscous_picard_change": ("-", "with Picard iterations: mean change of the velocities by the re-solves, per |v*|"),
+}
 DIAGNOSTIC_COLUMNS = ("t", "step", "dt", "kinetic_energy", "max_speed", "max_density_error", "mach")
-# particles that left by an open face (domain.outflow); mean iterations per step of the implicit
-# viscous solve since the previous row (numerics.viscosity: implicit) and, with Picard iterations,
-# the mean change of the velocities by the re-solves, per |v*|
 OPTIONAL_DIAGNOSTIC_COLUMNS = ("outflow", "viscous_iterations", "viscous_picard_change")
 INTEGER_DIAGNOSTIC_COLUMNS = ("step", "outflow")
 

@@ -4,15 +4,24 @@ import subprocess
 import sys
 from pathlib import Path
 
-from taichi_granular.keyref import key_reference
+from taichi_granular.reference import key_reference, output_reference
 
 REPO = Path(__file__).resolve().parent.parent
 
 
 def test_key_reference_is_current():
-    """docs/reference/keys.md is what `taichi-granular keys` writes today: regenerate it with
-    `taichi-granular keys --out docs/reference/keys.md` after changing a key."""
+    """docs/reference/keys.md is what `taichi-granular reference keys` writes today: regenerate it
+    with `taichi-granular reference keys --out docs/reference/keys.md` after changing a key."""
     assert (REPO / "docs" / "reference" / "keys.md").read_text() == key_reference()
+
+
+def test_output_reference_is_current():
+    """docs/reference/outputs.md likewise (`taichi-granular reference outputs --out ...`)."""
+    text = output_reference()
+    assert (REPO / "docs" / "reference" / "outputs.md").read_text() == text
+    for row in ("| `velocity` | vector | m/s | all |", "| `deviatoric_stress` | matrix |", "| `frictional_stress` | tensor3 |", "| `void_ratio` |",
+                "| `inertial_number` |", "| `mach` | - |", "| `is_wall` |"):
+        assert row in text, row
 
 
 def test_key_reference_names_every_key_with_its_unit_and_bounds():

@@ -50,6 +50,10 @@ class ElastoplasticMohrCoulomb:
                   "material"),
     )
     # (field, its rate, its start-of-step copy): integrated by the integrator like the density
+    derived_fields = (  # derived_output's, in the VTU files only
+        FieldSpec("shear_stress", "scalar", "tau = sqrt(J2) of the deviatoric stress", "Pa", "material"),
+        FieldSpec("mobilised_strength", "scalar", "tau / (c + p tan phi): 1 on the yield surface", "-", "material"),
+    )
     history = (("deviatoric_stress", "deviatoric_stress_rate", "deviatoric_stress_start"),)
 
     def __init__(self, material, dim: int, smoothing_length: float, precision: str = "f64", state=None,

@@ -99,6 +99,7 @@ class HypoplasticBagnold:
         FieldSpec("viscosity", "scalar", "secant viscosity sqrt(T*:T*/2)/gamma_dot, capped at 0.1 rho c h: the "
                   "strength of the momentum equation's residual damping", "Pa s", "material"),
     )
+    derived_fields = (FieldSpec("void_ratio", "scalar", "e = rho_s/rho - 1", "-", "material"),)  # VTU only
     history = ()  # T_s is advanced by its own sub-stepped update (module docstring), not by the integrator
     substep_limit = 0.5  # (sum |c_k|) ||D|| dt_sub
     max_substeps = 256

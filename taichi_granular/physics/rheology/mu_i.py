@@ -68,6 +68,11 @@ class MuIRheology:
 
     # integrated per-particle quantities besides x, v, rho: none (the stress is algebraic)
     history = ()
+    derived_fields = (  # derived_output's, in the VTU files only
+        FieldSpec("solid_fraction", "scalar", "phi = rho/rho_s", "-", "material"),
+        FieldSpec("inertial_number", "scalar", "I from the solid fraction, inverting [M8]", "-", "material"),
+        FieldSpec("grain_diameter", "scalar", "d of the compressed grain [M43]", "m", "material"),
+    )
 
     # ---- [M44], [M41]: grain density and pressure -------------------------------------------
 
