@@ -114,6 +114,14 @@ def particle_mesh(arrays: Dict[str, np.ndarray], n_material: int) -> meshio.Mesh
     return meshio.Mesh(points, cells, point_data=data)
 
 
+def read_diagnostics(out_dir: Path) -> List[dict]:
+    """The rows of a run's diagnostics.csv, numbers as numbers (``step`` and ``outflow`` as int);
+    a column left empty in a row (a run of an older version lacks the later ones) is absent."""
+    with open(Path(out_dir) / "diagnostics.csv") as fh:
+        return [{k: (int(v) if k in INTEGER_DIAGNOSTIC_COLUMNS else float(v)) for k, v in r.items() if v}
+                for r in csv.DictReader(fh)]
+
+
 CHECKPOINT = "checkpoint.npz"
 FAILURE = "failure.npz"
 
@@ -134,10 +142,7 @@ class RunOutput:
         if (self.dir / "particles.pvd").exists():
             self.frames = [(t, p.name) for t, p in read_series(self.dir) if t <= time * (1 + 1e-12)]
         if (self.dir / "diagnostics.csv").exists():
-            with open(self.dir / "diagnostics.csv") as fh:
-                rows = [{k: (int(v) if k in INTEGER_DIAGNOSTIC_COLUMNS else float(v)) for k, v in r.items() if v}
-                        for r in csv.DictReader(fh)]  # a run of an older version lacks the later columns
-            self.diagnostics = [r for r in rows if r["t"] <= time * (1 + 1e-12)]
+            self.diagnostics = [r for r in read_diagnostics(self.dir) if r["t"] <= time * (1 + 1e-12)]
 
     def write_checkpoint(self, arrays: Dict[str, np.ndarray], counters: Dict[str, float]) -> None:
         self._write_state(CHECKPOINT, arrays, counters)

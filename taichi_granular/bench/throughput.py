@@ -13,7 +13,6 @@ stage), and the kernel launches and host reads per step, counted with cProfile.
 ceiling one pair pass can reach, against which a step is a number of such passes.
 """
 import cProfile
-import math
 import pstats
 import time
 

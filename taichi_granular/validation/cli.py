@@ -97,12 +97,11 @@ COLLAPSE_FAMILIES = {
 
 
 def validate_column_collapse(args) -> int:
-    import csv
     import io
 
     import numpy as np
 
-    from ..output import atomic_write_text
+    from ..output import atomic_write_text, read_diagnostics
     from ..render.frames import write_png
     from ..render.plot import plot_points_and_curve
     from . import column_collapse as cc
@@ -113,9 +112,7 @@ def validate_column_collapse(args) -> int:
     results = []
     print(cc.HEADER)
     for scene, out, times, frames in _each_case(paths, base, args):
-        with open(out / "diagnostics.csv") as fh:
-            diagnostics = [{k: float(v) for k, v in row.items()} for row in csv.DictReader(fh)]
-        result = cc.evaluate(scene, times, frames, diagnostics, read_at_end=at_rest)
+        result = cc.evaluate(scene, times, frames, read_diagnostics(out), read_at_end=at_rest)
         cc.write_fronts_csv(result, out / "fronts.csv")
         results.append(result)
         print(result.row(), flush=True)
