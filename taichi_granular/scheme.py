@@ -31,7 +31,7 @@ from .config import ConfigError, Scene
 
 
 def boundary_class(scene: Scene):
-    obstacle_type = "extrapolated" if scene.material.model == "hypoplastic" else "dynamic"
+    obstacle_type = MODELS[scene.material.model].obstacle_walls
     types = sorted({w.type for w in scene.walls} | ({obstacle_type} if scene.obstacles else set()))
     if not types:
         return NoWalls
@@ -43,20 +43,19 @@ def boundary_class(scene: Scene):
 def rate_stage_classes(scene: Scene, model) -> List[type]:
     """Stages of one rate evaluation, in order."""
     classes = [NeighbourSearch] + GRADIENTS[scene.numerics.gradient_correction].stage_classes()
-    if scene.numerics.particle_shifting.enabled or getattr(model, "needs_free_surface", False):
+    if scene.numerics.particle_shifting.enabled or model.needs_free_surface:
         classes.append(FreeSurface)
     walls_cls = boundary_class(scene)
-    classes += getattr(walls_cls, "stage_classes", lambda s: [])(scene)
+    classes += walls_cls.stage_classes(scene)
     model_classes = model.stage_classes(scene)
     # boundary stresses extrapolated from the material's: after its stress, before the first force
     first_force = next((k for k, c in enumerate(model_classes) if c.category == "forces"), len(model_classes))
-    classes += model_classes[:first_force] + getattr(walls_cls, "stress_stage_classes", lambda s: [])(scene) + \
-        model_classes[first_force:]
+    classes += model_classes[:first_force] + walls_cls.stress_stage_classes(scene) + model_classes[first_force:]
     if scene.numerics.artificial_viscosity.enabled:
         classes.append(ArtificialViscosity)
     if scene.numerics.artificial_stress.enabled:
         classes.append(ArtificialStress)
-    classes += getattr(walls_cls, "force_stage_classes", lambda s: [])(scene)  # after every other force
+    classes += walls_cls.force_stage_classes(scene)  # after every other force
     if scene.numerics.particle_shifting.enabled:
         classes.append(ParticleShifting)
     return classes
@@ -112,7 +111,7 @@ class Scheme:
         runtime.choose_loops(ini.n_total)
         self.state = ParticleState(scene.dimension, ini.n_material, ini.n_wall, specs)
         wall_fields = {k: v for k, v in ini.wall_fields.items() if self.state.has(k)}
-        model_fields = model.initial_fields(ini) if hasattr(model, "initial_fields") else {}
+        model_fields = model.initial_fields(ini)
         self.state.load({"position": ini.position, "velocity": ini.velocity, "mass": ini.mass,
                          "density": ini.density, "pressure": ini.pressure, **wall_fields, **model_fields,
                          "particle_id": np.arange(ini.n_material, dtype=np.int32)})

@@ -36,11 +36,12 @@ import taichi as ti
 from ... import runtime
 
 from ...state import FieldSpec
+from .base import Model
 from ..stage import Stage
 
 
 @ti.data_oriented
-class ElastoplasticMohrCoulomb:
+class ElastoplasticMohrCoulomb(Model):
     name = "elastoplastic"
     fields = (
         FieldSpec("deviatoric_stress", "matrix", "deviatoric stress s [A6] (in-plane part in 2D)", "Pa", "material"),

@@ -82,13 +82,14 @@ import taichi as ti
 from ... import runtime
 
 from ...state import FieldSpec
+from .base import Model
 from ..stage import Stage
 
 KPA = 1.0e-3  # |tr T_s| enters e_crt and a in kPa (MODEL.md section 2)
 
 
 @ti.data_oriented
-class HypoplasticBagnold:
+class HypoplasticBagnold(Model):
     name = "hypoplastic"
     fields = (
         FieldSpec("frictional_stress", "tensor3", "T_s, hypoplastic stress, tension positive [P]", "Pa", "material"),
@@ -99,6 +100,7 @@ class HypoplasticBagnold:
         FieldSpec("viscosity", "scalar", "secant viscosity sqrt(T*:T*/2)/gamma_dot, capped at 0.1 rho c h: the "
                   "strength of the momentum equation's residual damping", "Pa s", "material"),
     )
+    obstacle_walls = "extrapolated"  # [P]'s wall particles, extrapolated from the material (walls/extrapolated.py)
     derived_fields = (FieldSpec("void_ratio", "scalar", "e = rho_s/rho - 1", "-", "material"),)  # VTU only
     history = ()  # T_s is advanced by its own sub-stepped update (module docstring), not by the integrator
     substep_limit = 0.5  # (sum |c_k|) ||D|| dt_sub

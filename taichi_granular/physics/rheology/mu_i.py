@@ -21,13 +21,14 @@ import taichi as ti
 from ... import runtime
 
 from ...state import FieldSpec
+from .base import Model
 from ...tmath import expm1
 from ..stage import Stage
 from ..strain_rate import deviator
 
 
 @ti.data_oriented
-class MuIRheology:
+class MuIRheology(Model):
     """Constants of one mu(I) material, and the per-particle physics as ``@ti.func``s.
 
     Units: densities kg/m^3, diameters m, pressures and stresses Pa, strain rates 1/s,
@@ -67,7 +68,6 @@ class MuIRheology:
                    implicit_viscosity=scene.implicit_viscosity)
 
     # integrated per-particle quantities besides x, v, rho: none (the stress is algebraic)
-    history = ()
     derived_fields = (  # derived_output's, in the VTU files only
         FieldSpec("solid_fraction", "scalar", "phi = rho/rho_s", "-", "material"),
         FieldSpec("inertial_number", "scalar", "I from the solid fraction, inverting [M8]", "-", "material"),
@@ -224,10 +224,6 @@ class MuIRheology:
         from ..strain_rate import StrainRate
         return [Continuity, StrainRate, GrainDensityPressure, RegularisedViscosity,
                 MOMENTUM[scene.numerics.momentum]]
-
-    def update_stage_classes(self):
-        """Stages run after each integrator update: none."""
-        return []
 
 
 @ti.data_oriented

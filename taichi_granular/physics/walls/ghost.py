@@ -38,6 +38,22 @@ class NoWalls:
 
     @classmethod
     def position_stage_classes(cls, scene):
+        """Stages after every position update (moving walls, impermeability)."""
+        return []
+
+    @classmethod
+    def stage_classes(cls, scene):
+        """Stages of a rate evaluation before the model's (the boundary's own density, velocities)."""
+        return []
+
+    @classmethod
+    def stress_stage_classes(cls, scene):
+        """Stages after the model's stress, before the first force (stresses extrapolated to the wall)."""
+        return []
+
+    @classmethod
+    def force_stage_classes(cls, scene):
+        """Stages after every other force (wall friction)."""
         return []
 
     def __init__(self, state, gravity=None):
