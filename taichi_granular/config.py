@@ -20,7 +20,7 @@ import re
 import typing
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Literal, Optional, Tuple, Union
+from typing import Any, ClassVar, FrozenSet, Literal, Optional, Tuple, Union
 
 import yaml
 
@@ -138,6 +138,12 @@ class Gravity:
 class MuIMaterial:
     """mu(I) rheology with compressible grains, Minatti & Paris (2015), MODEL.md section 1."""
 
+    # what the model supports (Scene.check; one declaration per model instead of tests on its name)
+    wall_types: ClassVar[Tuple[str, ...]] = ("ghost",)
+    walls_note: ClassVar[str] = "the mu(I) model of [M] uses ghost walls [M34]-[M36]"
+    obstacle_shapes: ClassVar[Tuple[str, ...]] = ()
+    numerics_read: ClassVar[FrozenSet[str]] = frozenset({"implicit_viscosity"})
+
     model: Literal["mu_i"] = _key("constitutive model")
     grain_density: float = _key("rho_s0, density of the grain material at zero pressure", unit="kg/m^3",
                                 bounds="[100, 25000]")
@@ -183,6 +189,12 @@ class MuIMaterial:
 class ElastoplasticMaterial:
     """Elastic-perfectly-plastic Mohr-Coulomb, Abdelrazek et al. (2016) after Bui et al.
     (2008), MODEL.md section 3."""
+
+    wall_types: ClassVar[Tuple[str, ...]] = ("ghost", "dynamic")
+    walls_note: ClassVar[str] = ("extrapolated walls need the hypoplastic model's stress (MODEL.md section 2); "
+                                 "the elastoplastic model's walls are dynamic boundary particles")
+    obstacle_shapes: ClassVar[Tuple[str, ...]] = ("chute", "box", "post_rows", "cylinder", "wedge", "mesh")
+    numerics_read: ClassVar[FrozenSet[str]] = frozenset({"artificial_stress", "stress_diffusion"})
 
     model: Literal["elastoplastic"] = _key("constitutive model")
     density: float = _key("rho_0, bulk density of the unstressed material [A5]", unit="kg/m^3", bounds="[100, 25000]")
@@ -233,6 +245,13 @@ class HypoplasticMaterial:
 
     ``parameter_set`` fills every constant from a [P] table (set1: simple shear; set2: incline,
     drum, pile; annular: the shear cell); a constant given explicitly overrides the table."""
+
+    wall_types: ClassVar[Tuple[str, ...]] = ("extrapolated",)
+    walls_note: ClassVar[str] = ("the hypoplastic model of [P] uses extrapolated walls, and extrapolated walls "
+                                 "need its stress (MODEL.md section 2)")
+    obstacle_shapes: ClassVar[Tuple[str, ...]] = ("drum",)
+    numerics_read: ClassVar[FrozenSet[str]] = frozenset({"artificial_stress", "stress_diffusion", "stress_increment",
+                                                         "bulk_viscosity"})
 
     model: Literal["hypoplastic"] = _key("constitutive model")
     parameter_set: Optional[Literal["set1", "set2", "annular"]] = _key(
@@ -810,6 +829,22 @@ class Render:
                                                 f"{MAX_FRAME_PX}); set render.height or a narrower view")
 
 
+# numerics keys that only some models read (their materials' ``numerics_read``): the name, whether
+# the scene asks for it, the key a message names, and what it is for
+MODEL_NUMERICS = {
+    "artificial_stress": (lambda n: n.artificial_stress.enabled, "numerics.artificial_stress.epsilon",
+                          "the tensile instability correction needs a stress tensor model; set it to 0"),
+    "stress_increment": (lambda n: n.stress_increment > 0.0, "numerics.stress_increment",
+                         "it bounds the step by the hypoplastic stress rate"),
+    "bulk_viscosity": (lambda n: n.bulk_viscosity > 0.0, "numerics.bulk_viscosity",
+                       "it resists compaction in a model with no equation of state; set it to 0"),
+    "stress_diffusion": (lambda n: n.stress_diffusion > 0.0, "numerics.stress_diffusion",
+                         "it smooths an integrated stress (mu(I)'s stress is algebraic); set it to 0"),
+    "implicit_viscosity": (lambda n: n.viscosity == "implicit", "numerics.viscosity",
+                           "the implicit viscous update is for the regularised viscosity of mu(I); set it to explicit"),
+}
+
+
 @dataclass(frozen=True, kw_only=True)
 class Scene:
     dimension: Literal[2, 3] = _key("2 or 3")
@@ -841,46 +876,27 @@ class Scene:
             raise ConfigError("particles", "at least one block of material is needed")
         for k, block in enumerate(self.particles):
             block.check(f"particles[{k}]", dim, self.domain, dp)
+        material = type(self.material)  # what the model declares it supports
         for k, wall in enumerate(self.walls):
             wall.check(f"walls[{k}]", dim)
-            if self.material.model == "mu_i" and wall.type != "ghost":
-                raise ConfigError(f"walls[{k}].type", "the mu(I) model of [M] uses ghost walls [M34]-[M36]")
+            if wall.type not in material.wall_types:
+                raise ConfigError(f"walls[{k}].type", material.walls_note)
         for k, obstacle in enumerate(self.obstacles):
             obstacle.check(f"obstacles[{k}]", dim)
-            if self.material.model != "hypoplastic" and any(w.type != "dynamic" for w in self.walls):
+            if obstacle.shape not in material.obstacle_shapes:
+                supported = ", ".join(material.obstacle_shapes) or "none"
+                raise ConfigError(f"obstacles[{k}].shape", f"material.model: {self.material.model} supports the "
+                                                           f"obstacles: {supported}")
+            if obstacle.shape != "drum" and any(w.type != "dynamic" for w in self.walls):
                 raise ConfigError(f"obstacles[{k}]", "obstacles are dynamic boundary particles; every wall of the "
                                                      "scene must then be of type dynamic")
-            if self.material.model == "mu_i":
-                raise ConfigError(f"obstacles[{k}]", "the mu(I) model of [M] uses ghost walls [M34]-[M36]; "
-                                                     "obstacles are dynamic boundary particles")
-        for k, wall in enumerate(self.walls):
-            if (self.material.model == "hypoplastic") != (wall.type == "extrapolated"):
-                raise ConfigError(f"walls[{k}].type", "the hypoplastic model of [P] uses extrapolated walls, and "
-                                                      "extrapolated walls need its stress (MODEL.md section 2)")
-        for k, obstacle in enumerate(self.obstacles):
-            if (self.material.model == "hypoplastic") != (obstacle.shape == "drum"):
-                raise ConfigError(f"obstacles[{k}].shape", "the hypoplastic model's obstacle is the drum (extrapolated "
-                                                           "walls); the other obstacles are dynamic boundary particles")
-        if self.material.model == "mu_i" and self.numerics.artificial_stress.enabled:
-            raise ConfigError("numerics.artificial_stress.epsilon", "the tensile instability correction needs a "
-                                                                    "stress tensor model (elastoplastic); set it to 0")
-        if self.material.model != "hypoplastic" and self.numerics.stress_increment > 0.0:
-            raise ConfigError("numerics.stress_increment", "bounds the step by the hypoplastic stress rate: only "
-                                                           "material.model: hypoplastic has one")
-        if self.material.model != "hypoplastic" and self.numerics.bulk_viscosity > 0.0:
-            raise ConfigError("numerics.bulk_viscosity",
-                              "only the hypoplastic model has no equation of state to resist "
-                                                         "compaction; set it to 0")
+        for name, (asked, key, why) in MODEL_NUMERICS.items():  # a model-specific key set for a model without it
+            if asked(self.numerics) and name not in material.numerics_read:
+                raise ConfigError(key, f"{why}; material.model: {self.material.model} does not have it")
         if self.numerics.viscosity == "implicit":  # asked for: must fit
-            if self.material.model != "mu_i":
-                raise ConfigError("numerics.viscosity", "the implicit viscous update is for the mu(I) model's "
-                                                        "regularised viscosity; set it to explicit")
             if self.numerics.integrator != "symplectic_verlet":
                 raise ConfigError("numerics.viscosity", "the implicit viscous update runs in the symplectic Verlet "
                                                         "kick; set numerics.integrator: symplectic_verlet")
-        if self.material.model == "mu_i" and self.numerics.stress_diffusion > 0.0:
-            raise ConfigError("numerics.stress_diffusion", "mu(I) integrates no stress (its stress is algebraic); "
-                                                           "set it to 0")
         if self.run.guard == "stage" and self.run.guard_every > 1:
             raise ConfigError("run.guard_every", "run.guard: stage checks after every stage of every step; "
                                                  "set run.guard_every: 1 (or run.guard: step)")

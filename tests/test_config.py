@@ -99,3 +99,31 @@ def test_overrides_index_lists():
     with pytest.raises(ConfigError, match="not an index") as info:
         load_scene(config_path("elastoplastic/collapse3d_a0_90_coarse.yaml"), ["walls.3.normal=[0, 0, 1]"])
     assert info.value.path == "walls.3"
+
+
+@pytest.mark.parametrize("scene, overrides, key, words", [
+    ("mu_i/collapse_a0_90.yaml", ["walls.0.type=dynamic"], "walls[0].type", "ghost walls"),
+    ("mu_i/collapse_a0_90.yaml", ["numerics.stress_diffusion=0.1"], "numerics.stress_diffusion", "mu_i does not have it"),
+    ("mu_i/collapse_a0_90.yaml", ["numerics.bulk_viscosity=0.1"], "numerics.bulk_viscosity", "mu_i does not have it"),
+    ("elastoplastic/collapse3d_a0_90_coarse.yaml", ["numerics.viscosity=implicit"], "numerics.viscosity",
+     "elastoplastic does not have it"),
+    ("elastoplastic/collapse3d_a0_90_coarse.yaml", ["numerics.stress_increment=0.01"], "numerics.stress_increment",
+     "elastoplastic does not have it"),
+    ("hypoplastic/collapse_a0_55.yaml", ["walls.0.type=dynamic"], "walls[0].type", "extrapolated walls"),
+])
+def test_what_a_model_does_not_support_is_named(scene, overrides, key, words):
+    """Scene.check reads each material's declaration (wall types, obstacle shapes, the model-specific
+    numerics keys it reads), not the model's name."""
+    with pytest.raises(ConfigError) as err:
+        load_scene(config_path(scene), overrides)
+    assert str(err.value).startswith(key + ":") and words in str(err.value), str(err.value)
+
+
+def test_obstacles_a_model_does_not_support_are_named():
+    data = yaml.safe_load(config_path("mu_i/collapse_a0_90.yaml").read_text())
+    data["obstacles"] = [{"shape": "box", "lower": [0.5, 0.0], "upper": [0.6, 0.05]}]
+    with pytest.raises(ConfigError) as err:
+        scene_from_dict(data)
+    assert str(err.value).startswith("obstacles[0].shape:") and "supports the obstacles: none" in str(err.value)
+    drum = yaml.safe_load(config_path("hypoplastic/drum_omega1.yaml").read_text())
+    assert scene_from_dict(drum).obstacles[0].shape == "drum"
