@@ -142,6 +142,7 @@ class MuIMaterial:
     wall_types: ClassVar[Tuple[str, ...]] = ("ghost",)
     walls_note: ClassVar[str] = "the mu(I) model of [M] uses ghost walls [M34]-[M36]"
     obstacle_shapes: ClassVar[Tuple[str, ...]] = ()
+    obstacle_walls: ClassVar[str] = "dynamic"  # the boundary model obstacles are laid as
     numerics_read: ClassVar[FrozenSet[str]] = frozenset({"implicit_viscosity"})
 
     model: Literal["mu_i"] = _key("constitutive model")
@@ -194,6 +195,7 @@ class ElastoplasticMaterial:
     walls_note: ClassVar[str] = ("extrapolated walls need the hypoplastic model's stress (MODEL.md section 2); "
                                  "the elastoplastic model's walls are dynamic boundary particles")
     obstacle_shapes: ClassVar[Tuple[str, ...]] = ("chute", "box", "post_rows", "cylinder", "wedge", "mesh")
+    obstacle_walls: ClassVar[str] = "dynamic"
     numerics_read: ClassVar[FrozenSet[str]] = frozenset({"artificial_stress", "stress_diffusion"})
 
     model: Literal["elastoplastic"] = _key("constitutive model")
@@ -250,6 +252,7 @@ class HypoplasticMaterial:
     walls_note: ClassVar[str] = ("the hypoplastic model of [P] uses extrapolated walls, and extrapolated walls "
                                  "need its stress (MODEL.md section 2)")
     obstacle_shapes: ClassVar[Tuple[str, ...]] = ("drum",)
+    obstacle_walls: ClassVar[str] = "extrapolated"  # [P]'s wall particles, extrapolated from the material
     numerics_read: ClassVar[FrozenSet[str]] = frozenset({"artificial_stress", "stress_diffusion", "stress_increment",
                                                          "bulk_viscosity"})
 
@@ -887,9 +890,10 @@ class Scene:
                 supported = ", ".join(material.obstacle_shapes) or "none"
                 raise ConfigError(f"obstacles[{k}].shape", f"material.model: {self.material.model} supports the "
                                                            f"obstacles: {supported}")
-            if obstacle.shape != "drum" and any(w.type != "dynamic" for w in self.walls):
-                raise ConfigError(f"obstacles[{k}]", "obstacles are dynamic boundary particles; every wall of the "
-                                                     "scene must then be of type dynamic")
+            if any(w.type != material.obstacle_walls for w in self.walls):
+                raise ConfigError(f"obstacles[{k}]", f"obstacles of material.model: {self.material.model} are "
+                                                     f"{material.obstacle_walls} boundary particles; every wall of "
+                                                     f"the scene must then be of type {material.obstacle_walls}")
         for name, (asked, key, why) in MODEL_NUMERICS.items():  # a model-specific key set for a model without it
             if asked(self.numerics) and name not in material.numerics_read:
                 raise ConfigError(key, f"{why}; material.model: {self.material.model} does not have it")

@@ -13,8 +13,8 @@ _current: tuple | None = None
 
 # Every top-level particle loop is written ``ti.loop_config(serialize=runtime.serial_loops)``.
 # Taichi reads the flag when it compiles a kernel (at its first launch), so the scheme sets it
-# before running anything. On the CPU, handing a loop to the thread pool costs ~60 us on this
-# 2-core machine against ~2 us for a serial launch (launch.py; measured), which dominates small scenes.
+# before running anything. On the CPU, handing a loop to the thread pool costs ~20 us more than
+# running it serially on this 2-core machine, against ~2 us for a launch (launch.py; measured), which dominates small scenes.
 serial_loops = False
 # particles, material and boundary; measured crossover on 2 idle CPU cores (see choose_loops):
 # mu(I) 2D serial / parallel ms a step at 1 088 / 1 617 / 2 115 particles 1.21 / 1.72 / 2.22

@@ -31,7 +31,7 @@ from .config import ConfigError, Scene
 
 
 def boundary_class(scene: Scene):
-    obstacle_type = MODELS[scene.material.model].obstacle_walls
+    obstacle_type = type(scene.material).obstacle_walls
     types = sorted({w.type for w in scene.walls} | ({obstacle_type} if scene.obstacles else set()))
     if not types:
         return NoWalls

@@ -80,14 +80,14 @@ class Progress:
         self.enabled = enabled
         self.start = time.perf_counter()
         self.last = 0.0
-        self.samples = collections.deque()  # (wall, simulated time, step) of recent updates
+        self.samples = collections.deque()  # (wall, simulated time) of recent updates
 
-    def eta(self, now: float, t: float, step: int) -> float:
+    def eta(self, now: float, t: float) -> float:
         """Wall seconds left at the recent rate (NaN until two updates a while apart)."""
-        self.samples.append((now, t, step))
+        self.samples.append((now, t))
         while len(self.samples) > 2 and now - self.samples[1][0] >= self.WINDOW:
             self.samples.popleft()
-        wall0, t0, _ = self.samples[0]
+        wall0, t0 = self.samples[0]
         if now - wall0 <= 0.0 or t <= t0:
             return float("nan")
         return (self.end_time - t) * (now - wall0) / (t - t0)
@@ -102,7 +102,7 @@ class Progress:
         elapsed = now - self.start
         rate = step / elapsed if elapsed > 0 else 0.0
         frac = min(1.0, t / self.end_time)
-        eta = self.eta(now, t, step)
+        eta = self.eta(now, t)
         bar = "#" * int(30 * frac)
         eta_text = time.strftime("%H:%M:%S", time.gmtime(eta)) if math.isfinite(eta) else "--:--:--"
         sys.stderr.write(f"\r[{bar:<30}] t = {t:.4g}/{self.end_time:.4g} s  step {step}  "
@@ -175,6 +175,11 @@ class Simulation:
         elif self.scene.run.guard == "step":
             message += " (resume from the last checkpoint with --set run.guard=stage to name the stage)"
         raise SimulationError(self._write_failure(message))
+
+    def _check_unless_checked(self) -> None:
+        """The guard at the current step, unless it has already passed it (run.guard_every > 1)."""
+        if self.last_guarded != self.step_count:
+            self._check(f"after step {self.step_count}")
 
     def _write_failure(self, message: str) -> str:
         """The whole state to failure.npz / failure.vtu (the last checkpoint untouched); returns
@@ -262,8 +267,7 @@ class Simulation:
             if max_steps is not None and self.step_count >= max_steps:
                 break
             if not self.dt >= min_dt:
-                if self.last_guarded != self.step_count:  # a NaN time step: name the particle behind it
-                    self._check(f"after step {self.step_count}")
+                self._check_unless_checked()  # a NaN time step: name the particle behind it
                 raise SimulationError(self._write_failure(
                     f"step {self.step_count}, t = {self.t:.6g} s: stable time step {self.dt:.3g} s fell below "
                     f"numerics.min_time_step = {min_dt:.3g} s"))
@@ -312,8 +316,7 @@ class Simulation:
                 progress.close()
             if self.step_count > start_steps and self.last_diagnostics.get("step") != self.step_count:
                 # stopped between output times (max_steps, end_time off the output grid, Ctrl-C)
-                if self.last_guarded != self.step_count:
-                    self._check(f"after step {self.step_count}")
+                self._check_unless_checked()
                 self.write_frame(final=True)
         if interrupt.caught:
             where = f" (state at t = {self.t:.6g} s written to {self.output.dir})" if self.output else ""

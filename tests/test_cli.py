@@ -113,14 +113,14 @@ def test_progress_eta_follows_the_recent_rate_not_the_compile():
     from taichi_granular.simulation import Progress
 
     progress = Progress(end_time=10.0, enabled=False)
-    assert progress.eta(10.0, 0.01, 1) != progress.eta(10.0, 0.01, 1)  # NaN: nothing to extrapolate yet
+    assert progress.eta(10.0, 0.01) != progress.eta(10.0, 0.01)  # NaN: nothing to extrapolate yet
     # after 10 s of compilation, 0.01 simulated seconds per wall second
     for k in range(1, 60):
-        eta = progress.eta(10.0 + k, 0.01 + 0.01 * k, k)
+        eta = progress.eta(10.0 + k, 0.01 + 0.01 * k)
     assert abs(eta - (10.0 - 0.6) / 0.01) < 1e-6  # the recent rate, not the one since the start (compile included)
     for k in range(60, 101):  # the flow speeds up: twice the simulated time per wall second
         t = 0.6 + 0.02 * (k - 59)
-        eta = progress.eta(10.0 + k, t, k)
+        eta = progress.eta(10.0 + k, t)
     assert abs(eta - (10.0 - t) / 0.02) < 1e-6  # the window holds the new rate only
 
 

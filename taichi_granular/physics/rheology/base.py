@@ -2,12 +2,13 @@
 
 A model class names its fields (``fields``: FieldSpecs the state allocates), the fields it only
 derives for output (``derived_fields``, from ``derived_output``), the tensors the integrator
-advances like the density (``history``: (field, rate, start) names), the boundary model its
-obstacles are laid as (``obstacle_walls``) and whether it needs the free-surface flag
-(``needs_free_surface``); it builds itself from a scene (``from_scene``), lists the stages of a
+advances like the density (``history``: (field, rate, start) names) and whether it needs the
+free-surface flag (``needs_free_surface``); it builds itself from a scene (``from_scene``), lists the stages of a
 rate evaluation (``stage_classes``) and those after each update (``update_stage_classes``),
 and offers, inside kernels, ``stable_time_step(i)`` [s] and ``density_error(i)`` [-]. The
-defaults below are what a model without that feature declares.
+defaults below are what a model without that feature declares. What a scene may combine with
+the model (wall types, obstacles, model-specific numerics keys) its parameter class in config.py
+declares, so that a scene is checked before anything is built.
 """
 from typing import Tuple
 
@@ -16,7 +17,6 @@ class Model:
     fields: Tuple = ()
     derived_fields: Tuple = ()
     history: Tuple = ()
-    obstacle_walls = "dynamic"  # obstacles: dynamic boundary particles unless the model says otherwise
     needs_free_surface = False
 
     def initial_fields(self, initial) -> dict:

@@ -100,7 +100,6 @@ class HypoplasticBagnold(Model):
         FieldSpec("viscosity", "scalar", "secant viscosity sqrt(T*:T*/2)/gamma_dot, capped at 0.1 rho c h: the "
                   "strength of the momentum equation's residual damping", "Pa s", "material"),
     )
-    obstacle_walls = "extrapolated"  # [P]'s wall particles, extrapolated from the material (walls/extrapolated.py)
     derived_fields = (FieldSpec("void_ratio", "scalar", "e = rho_s/rho - 1", "-", "material"),)  # VTU only
     history = ()  # T_s is advanced by its own sub-stepped update (module docstring), not by the integrator
     substep_limit = 0.5  # (sum |c_k|) ||D|| dt_sub
