@@ -19,7 +19,7 @@ from .physics.artificial_viscosity import ArtificialViscosity
 from .physics.gradient_correction import GRADIENTS
 from .physics.implicit_viscosity import ImplicitViscosity
 from .physics.outflow import Outflow
-from .physics.rheology import MODELS
+from .physics.rheology import model_class
 from .physics.shifting import FreeSurface, ParticleShifting
 from .physics.stage import Context, fuse_pair_stages
 from .physics.walls import BOUNDARIES, NoWalls
@@ -96,7 +96,7 @@ class Scheme:
                  fuse: bool = True):
         self.scene = scene
         self.profiler = profiler or StageProfiler(False)
-        model = MODELS[scene.material.model].from_scene(scene)
+        model = model_class(scene.material.model).from_scene(scene)
         self.initial = initial if initial is not None else build_initial(scene, model)
         walls_cls = boundary_class(scene)
         rate_classes = rate_stage_classes(scene, model)

@@ -76,7 +76,7 @@ def test_numbers_written_without_a_dot_are_numbers():
 
 
 def test_material_behind_a_wall_is_an_error():
-    from taichi_granular.physics.rheology.mu_i import MuIRheology
+    from taichi_granular.physics.rheology.mu_i.model import MuIRheology
     from taichi_granular.scene import build_initial
 
     scene = load_with(lambda d: d["walls"][0].update(point=[0.0, 0.05]))

@@ -8,11 +8,11 @@ import taichi as ti
 
 from scenes import SAND, elastoplastic_numerics, lowest_and_rightmost
 from taichi_granular.config import scene_from_dict
-from taichi_granular.physics.rheology import ElastoplasticMohrCoulomb
+from taichi_granular.physics.rheology.elastoplastic.model import ElastoplasticMohrCoulomb
 from taichi_granular.simulation import Simulation
 
 def model_of(dim, material=SAND, bulk_modulus=1.0e5):
-    from taichi_granular.config import ElastoplasticMaterial
+    from taichi_granular.physics.rheology.elastoplastic.parameters import ElastoplasticMaterial
     return ElastoplasticMohrCoulomb(ElastoplasticMaterial(**material), dim, 0.01, bulk_modulus=bulk_modulus)
 
 

@@ -4,7 +4,8 @@ import math
 import numpy as np
 import pytest
 
-from taichi_granular.config import AnyObstacle, ConfigError, _convert
+from taichi_granular.bodies import AnyObstacle
+from taichi_granular.config import ConfigError, _convert
 from taichi_granular.scene import geometry as geo
 
 DP = 0.005
@@ -171,13 +172,13 @@ def stake_scene(case=2, resolution="_coarse"):
 def test_stake_row_scenes_build_as_described():
     """The configs hold what their comments say: 2.0 kg of sand (paper) in the release box, the
     rows 0.30 m down the 20 deg panel, and no material particle inside a boundary."""
-    from taichi_granular.physics.rheology import MODELS
+    from taichi_granular.physics.rheology import model_class
     from taichi_granular.scene import build_initial
     from taichi_granular.validation import obstacles as ob
 
     for case, resolution, mass in ((1, "", 2.025), (2, "_coarse", 1.89), (3, "_coarse", 1.89)):
         scene = stake_scene(case, resolution)
-        ini = build_initial(scene, MODELS["elastoplastic"].from_scene(scene))
+        ini = build_initial(scene, model_class("elastoplastic").from_scene(scene))
         assert ini.mass[:ini.n_material].sum() == pytest.approx(mass)
         offset = 0.25 if resolution else 0.0  # the coarse chutes start 0.25 m down the 45 deg panel
         first, last = ob.post_rows_span(scene)
@@ -216,7 +217,7 @@ def test_efficiency_factor_counts_the_areas():
 
 def test_material_inside_an_obstacle_is_refused():
     from taichi_granular.config import ConfigError
-    from taichi_granular.physics.rheology import MODELS
+    from taichi_granular.physics.rheology import model_class
     from taichi_granular.scene import build_initial
     import dataclasses
 
@@ -224,4 +225,4 @@ def test_material_inside_an_obstacle_is_refused():
     block = dataclasses.replace(scene.particles[0], lower=(0.25, -0.06, 0.0))  # into the box's back wall
     scene = dataclasses.replace(scene, particles=(block,))
     with pytest.raises(ConfigError, match=r"obstacles\[1\].*within dp/2.*release box back"):
-        build_initial(scene, MODELS["elastoplastic"].from_scene(scene))
+        build_initial(scene, model_class("elastoplastic").from_scene(scene))

@@ -8,7 +8,7 @@ import taichi as ti
 
 from scenes import build
 from taichi_granular.config import ConfigError
-from taichi_granular.physics.rheology.hypoplastic import HypoplasticBagnold
+from taichi_granular.physics.rheology.hypoplastic.model import HypoplasticBagnold
 from taichi_granular.validation import element_tests as et
 
 SHEAR = et.SIMPLE_SHEAR

@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 import taichi as ti
 
-from taichi_granular.config import MuIMaterial
-from taichi_granular.physics.rheology.mu_i import MuIRheology
+from taichi_granular.physics.rheology.mu_i.parameters import MuIMaterial
+from taichi_granular.physics.rheology.mu_i.model import MuIRheology
 
 GLASS = MuIMaterial(model="mu_i", grain_density=800.0, grain_diameter=0.5e-3, static_friction_deg=20.90,
                     limit_friction_deg=32.76, reference_inertial_number=0.279, grain_compressibility=1.5e-5,

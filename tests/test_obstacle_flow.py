@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from taichi_granular.config import scene_from_dict
-from taichi_granular.scene.geometry import to_global
+from taichi_granular.local_frame import to_global
 from taichi_granular.validation import obstacle_flow as of
 
 DP = 0.005

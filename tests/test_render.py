@@ -127,7 +127,7 @@ def test_a_top_view_camera_shows_x_to_the_right(tmp_path):
     parallel to the view)."""
     import dataclasses
 
-    from taichi_granular.config import Camera
+    from taichi_granular.sections import Camera
 
     scene = scene_3d()
     top = Camera(position=(0.0, 0.0, 3.0), look_at=(0.0, 0.0, 0.0), up=(0.0, 1.0, 0.0), field_of_view_deg=30.0)

@@ -11,7 +11,7 @@ The momentum equation gains a short-range repulsion that only acts between close
     dv_i/dt += sum_j m_j (R_i + R_j) f_ij^n . grad_i W_ij,   f_ij = W(r_ij)/W(dp)
 (Gray et al.: epsilon ~ 0.3, n = 4). The tensile part of sigma is where the Mohr-Coulomb cone
 is exceeded in extension or cohesion holds material in tension: for cohesionless sand under
-the tension cut-off of physics/rheology/elastoplastic.py the principal stresses stay
+the tension cut-off of physics/rheology/elastoplastic/model.py the principal stresses stay
 compressive except where s nearly reaches the cone at small p, so the term is mostly idle
 there and matters for cohesive soils (c > 0).
 

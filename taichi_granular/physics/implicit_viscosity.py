@@ -24,7 +24,7 @@ after each solve and solves again from the same v*: the changes shrink ~6x per i
 and on the coarse a = 2.75 collapse the second solve moves the velocities by 1-4e-4 of |v*|, the
 solve's own tolerance, after the first steps (measured): the lag costs nothing worth a second
 solve, so one stays the default. The time step then keeps [M39]'s acoustic limit only
-(physics/rheology/mu_i.py).
+(physics/rheology/mu_i/model.py).
 
 The solve is matrix-free over the neighbour lists: BiCGSTAB (van der Vorst 1992) with right
 block-Jacobi preconditioning by the d x d diagonal blocks of I - dt L_[M27] (exact for the pair

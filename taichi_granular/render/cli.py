@@ -17,7 +17,7 @@ def render_output(args) -> int:
     if args.view:
         changes["view_lower"], changes["view_upper"] = tuple(args.view[:2]), tuple(args.view[2:])
     if args.camera:  # 3D: another viewpoint (e.g. a top view, with --up 0 1 0: x to the right)
-        from ..config import Camera
+        from ..sections import Camera
         old = settings.camera
         changes["camera"] = Camera(position=tuple(args.camera[:3]), look_at=tuple(args.camera[3:]),
                                    up=tuple(args.up) if args.up else (0.0, 0.0, 1.0),

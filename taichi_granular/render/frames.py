@@ -12,7 +12,8 @@ from typing import Dict, Sequence, Tuple
 
 import numpy as np
 
-from ..config import COLOUR_BAR_MARGIN, Scene
+from ..config import Scene
+from ..sections import COLOUR_BAR_MARGIN
 from ..output import left_domain
 from .colormap import BACKGROUND, NEUTRAL_GREY, colour_map
 from .font import GLYPH_HEIGHT, draw_text, text_width

@@ -14,7 +14,8 @@ from typing import Callable, Dict, List
 import numpy as np
 
 from ..config import ConfigError, Scene
-from .geometry import GeometryError, lattice_counts, local_axes, obstacle_particles, slab, to_global
+from ..local_frame import local_axes, to_global
+from .geometry import GeometryError, lattice_counts, obstacle_particles, slab
 
 
 @dataclass

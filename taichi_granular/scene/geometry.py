@@ -1,6 +1,6 @@
 """Obstacles -> dynamic boundary particles, in numpy only (MODEL.md section 3, [A] Sec 4.3).
 
-Every obstacle is laid in its own frame (config ``_Obstacle``): ``origin`` and a tilt about the
+Every obstacle is laid in its own frame (bodies.py ``_Obstacle``, local_frame.py): ``origin`` and a tilt about the
 y axis, so that local x runs down a slope and local z is the slope normal. In that frame:
 
 - chute planes are slabs of ``layers`` rows below the bed, staggered by dp/2 along the plane
@@ -22,8 +22,10 @@ from typing import Callable, List, Tuple
 
 import numpy as np
 
-from ..config import (BoxObstacle, ChuteObstacle, CylinderObstacle, DrumObstacle, MeshObstacle, PostRowsObstacle,
-                      WedgeObstacle, max_particles)
+from ..bodies import (BoxObstacle, ChuteObstacle, CylinderObstacle, DrumObstacle, MeshObstacle, PostRowsObstacle,
+                      WedgeObstacle)
+from ..local_frame import local_axes, to_global, to_local
+from ..sections import max_particles
 
 
 class GeometryError(ValueError):
@@ -33,38 +35,13 @@ class GeometryError(ValueError):
 
 def lattice_counts(extent, spacing: float) -> List[int]:
     """Lattice points per axis of spacing ``spacing`` over ``extent`` [(lo, hi), ...]  [m]; raises
-    :class:`GeometryError` before numpy allocates more points than :func:`config.max_particles`."""
+    :class:`GeometryError` before numpy allocates more points than :func:`sections.max_particles`."""
     counts = [max(int(math.floor((hi - lo) / spacing + 1e-9)), 0) for lo, hi in extent]
     total = math.prod(counts)
     if total > max_particles():
         raise GeometryError(f"would lay {total:.3g} particles at dp = {spacing:g} m, more than this machine's "
                             f"memory holds ({max_particles():.3g}); shrink it or coarsen numerics.particle_spacing")
     return counts
-
-
-def local_axes(tilt_deg: float, dim: int) -> np.ndarray:
-    """(dim, dim) matrix whose columns are the local axes in global coordinates: x' down a
-    slope of ``tilt_deg`` below the horizontal, (y' = y in 3D), and the slope normal last."""
-    t = math.radians(tilt_deg)
-    if dim == 2:
-        return np.array([[math.cos(t), math.sin(t)], [-math.sin(t), math.cos(t)]])
-    return np.array([[math.cos(t), 0.0, math.sin(t)], [0.0, 1.0, 0.0], [-math.sin(t), 0.0, math.cos(t)]])
-
-
-def to_global(points: np.ndarray, origin, tilt_deg: float) -> np.ndarray:
-    """Local-frame points -> global coordinates  [m]."""
-    points = np.asarray(points, float)
-    dim = points.shape[1]
-    origin = np.zeros(dim) if origin is None else np.asarray(origin, float)
-    return origin + points @ local_axes(tilt_deg, dim).T
-
-
-def to_local(points: np.ndarray, origin, tilt_deg: float) -> np.ndarray:
-    """Global points -> local-frame coordinates  [m]."""
-    points = np.asarray(points, float)
-    dim = points.shape[1]
-    origin = np.zeros(dim) if origin is None else np.asarray(origin, float)
-    return (points - origin) @ local_axes(tilt_deg, dim)
 
 
 # ---- slabs (planes) ------------------------------------------------------------------------

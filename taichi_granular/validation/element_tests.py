@@ -120,7 +120,7 @@ class ElementTest:
 
     def __init__(self, scene, initial_pressure: float):
         from ..physics.gradient_correction import GradientCorrection
-        from ..physics.rheology.hypoplastic import FrictionalStressUpdate, TotalStress
+        from ..physics.rheology.hypoplastic.model import FrictionalStressUpdate, TotalStress
         from ..physics.strain_rate import StrainRate
         from ..scheme import Scheme
 

@@ -37,7 +37,8 @@ from typing import Dict, List, Sequence
 
 import numpy as np
 
-from ..config import MuIMaterial, Scene
+from ..config import Scene
+from ..physics.rheology.mu_i.parameters import MuIMaterial
 
 
 def steady_inertial_number(material: MuIMaterial, slope_rad: float) -> float:
@@ -114,7 +115,7 @@ def stationary_shear_of(scene: Scene):
     key = (tuple(m.constants), m.min_void_ratio, tuple(m.critical_void_ratio), tuple(m.density_exponent))
     if key not in _STATIONARY_SHEAR:
         from .. import runtime
-        from ..physics.rheology.hypoplastic import HypoplasticBagnold
+        from ..physics.rheology.hypoplastic.model import HypoplasticBagnold
         from .element_tests import stationary_simple_shear
         if runtime.current() is None:
             runtime.init("cpu", scene.precision)

@@ -27,7 +27,8 @@ from typing import Dict, List, Sequence
 
 import numpy as np
 
-from ..config import BoxObstacle, ChuteObstacle, CylinderObstacle, Scene, WedgeObstacle
+from ..bodies import BoxObstacle, ChuteObstacle, CylinderObstacle, WedgeObstacle
+from ..config import Scene
 from ..output import left_domain
 from .obstacles import along_chute, obstacle_of
 

@@ -19,8 +19,9 @@ from typing import Dict, List, Sequence
 
 import numpy as np
 
-from ..config import ChuteObstacle, PostRowsObstacle, Scene
-from ..scene.geometry import local_axes, to_local
+from ..bodies import ChuteObstacle, PostRowsObstacle
+from ..config import Scene
+from ..local_frame import local_axes, to_local
 from ..output import left_domain
 
 LEE = 0.10  # [m] past the last row that still counts as retained (area 2; our choice)

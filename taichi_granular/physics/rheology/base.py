@@ -1,16 +1,40 @@
-"""What a constitutive model declares and offers: the one interface the scheme reads.
+"""What a constitutive model declares and offers: the one interface the scene check and the
+scheme read. A model is one package here (``<name>/parameters.py`` and ``<name>/model.py``)
+named in the registry of ``__init__.py``.
 
-A model class names its fields (``fields``: FieldSpecs the state allocates), the fields it only
-derives for output (``derived_fields``, from ``derived_output``), the tensors the integrator
-advances like the density (``history``: (field, rate, start) names) and whether it needs the
-free-surface flag (``needs_free_surface``); it builds itself from a scene (``from_scene``), lists the stages of a
+:class:`MaterialParameters` is the base of a model's parameter class (its keys, under
+``material:``): besides the keys it declares, as class variables, what a scene may combine with
+the model (wall types, obstacle shapes and the boundary model they are laid as, the
+model-specific numerics keys it reads), so that a scene is checked before anything is built.
+
+:class:`Model` is the base of the model itself. It names its fields (``fields``: FieldSpecs the
+state allocates), the fields it only derives for output (``derived_fields``, from
+``derived_output``), the tensors the integrator advances like the density (``history``:
+(field, rate, start) names) and whether it needs the free-surface flag
+(``needs_free_surface``); it builds itself from a scene (``from_scene``), lists the stages of a
 rate evaluation (``stage_classes``) and those after each update (``update_stage_classes``),
 and offers, inside kernels, ``stable_time_step(i)`` [s] and ``density_error(i)`` [-]. The
-defaults below are what a model without that feature declares. What a scene may combine with
-the model (wall types, obstacles, model-specific numerics keys) its parameter class in config.py
-declares, so that a scene is checked before anything is built.
+defaults below are what a model without that feature declares.
 """
-from typing import Tuple
+from dataclasses import dataclass
+from typing import ClassVar, FrozenSet, Tuple
+
+
+@dataclass(frozen=True, kw_only=True)
+class MaterialParameters:
+    wall_types: ClassVar[Tuple[str, ...]] = ()  # Wall.type values the model's physics supports
+    walls_note: ClassVar[str] = ""  # why other wall types are refused (the error message)
+    obstacle_shapes: ClassVar[Tuple[str, ...]] = ()  # obstacle shapes a scene of this model may hold
+    obstacle_walls: ClassVar[str] = "dynamic"  # the boundary model obstacles are laid as
+    numerics_read: ClassVar[FrozenSet[str]] = frozenset()  # model-specific numerics keys (config.MODEL_NUMERICS)
+
+    def check(self, path: str) -> None:
+        """Relations between keys (each key's own range is checked by keys.check_numbers)."""
+
+    @property
+    def reference_density(self) -> float:
+        """Bulk density of the material at rest and unstressed  [kg/m^3]."""
+        raise NotImplementedError
 
 
 class Model:

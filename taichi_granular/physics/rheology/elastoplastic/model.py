@@ -33,11 +33,11 @@ import math
 import numpy as np
 import taichi as ti
 
-from ... import runtime
+from .... import runtime
 
-from ...state import FieldSpec
-from .base import Model
-from ..stage import Stage
+from ....state import FieldSpec
+from ..base import Model
+from ...stage import Stage
 
 
 @ti.data_oriented
@@ -185,10 +185,10 @@ class ElastoplasticMohrCoulomb(Model):
                                                                      0.0)}
 
     def stage_classes(self, scene):
-        from ..continuity import Continuity
-        from ..momentum import MOMENTUM
-        from ..strain_rate import StrainRate
-        from ..stress_diffusion import StressDiffusion
+        from ...continuity import Continuity
+        from ...momentum import MOMENTUM
+        from ...strain_rate import StrainRate
+        from ...stress_diffusion import StressDiffusion
         diffusion = [StressDiffusion] if scene.numerics.stress_diffusion > 0.0 else []
         # the strain rate does not need the pressure: before it, so that it shares continuity's pass
         return [Continuity, StrainRate, LinearPressure, JaumannStressRate] + diffusion + \
@@ -249,3 +249,6 @@ class PlasticCorrection(Stage):
             s, plastic = self.model.return_to_yield(self.state.deviatoric_stress[i], p)
             self.state.deviatoric_stress[i] = s
             self.state.plastic[i] = plastic
+
+
+MODEL = ElastoplasticMohrCoulomb

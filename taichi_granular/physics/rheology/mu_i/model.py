@@ -18,13 +18,13 @@ import math
 import numpy as np
 import taichi as ti
 
-from ... import runtime
+from .... import runtime
 
-from ...state import FieldSpec
-from .base import Model
-from ...tmath import expm1
-from ..stage import Stage
-from ..strain_rate import deviator
+from ....state import FieldSpec
+from ..base import Model
+from ....tmath import expm1
+from ...stage import Stage
+from ...strain_rate import deviator
 
 
 @ti.data_oriented
@@ -219,9 +219,9 @@ class MuIRheology(Model):
                 "grain_diameter": self.d0 * (self.rho_s0 / rho_s) ** exponent}
 
     def stage_classes(self, scene):
-        from ..continuity import Continuity
-        from ..momentum import MOMENTUM
-        from ..strain_rate import StrainRate
+        from ...continuity import Continuity
+        from ...momentum import MOMENTUM
+        from ...strain_rate import StrainRate
         return [Continuity, StrainRate, GrainDensityPressure, RegularisedViscosity,
                 MOMENTUM[scene.numerics.momentum]]
 
@@ -260,3 +260,6 @@ class RegularisedViscosity(Stage):
         for i in range(self.state.n_material):
             self.state.viscosity[i] = self.model.regularised_viscosity(self.state.pressure[i],
                                                                        self.state.strain_rate[i])
+
+
+MODEL = MuIRheology

@@ -79,11 +79,11 @@ import math
 import numpy as np
 import taichi as ti
 
-from ... import runtime
+from .... import runtime
 
-from ...state import FieldSpec
-from .base import Model
-from ..stage import Stage
+from ....state import FieldSpec
+from ..base import Model
+from ...stage import Stage
 
 KPA = 1.0e-3  # |tr T_s| enters e_crt and a in kPa (MODEL.md section 2)
 
@@ -346,9 +346,9 @@ class HypoplasticBagnold(Model):
         return {"void_ratio": self.grain_density / arrays["density"][:n] - 1.0}
 
     def stage_classes(self, scene):
-        from ..continuity import Continuity
-        from ..momentum import MOMENTUM
-        from ..strain_rate import StrainRate
+        from ...continuity import Continuity
+        from ...momentum import MOMENTUM
+        from ...strain_rate import StrainRate
         return [Continuity, StrainRate, TotalStress, MOMENTUM["stress_divergence"]]
 
     def update_stage_classes(self):
@@ -421,3 +421,6 @@ class TotalStress(Stage):
                 s[a, b] = stress[a, b]
             self.state.pressure[i] = pressure
             self.state.deviatoric_stress[i] = s + pressure * ti.Matrix.identity(float, self.state.dim)
+
+
+MODEL = HypoplasticBagnold

@@ -1,0 +1,1 @@
+"""mu(I) rheology with compressible grains, Minatti & Paris (2015): MODEL.md section 1, docs/models/mu_i.md."""
