@@ -31,7 +31,7 @@ class ParticleBlock:
         "lay the box in a local frame with this origin (lower and upper are then local coordinates; "
         "default: global coordinates)", None, "m", bounds="[-1e5, 1e5]")
     tilt_deg: float = scene_key("tilt of that frame about y (as obstacles: local x descends a slope of tilt_deg; the "
-                           "hydrostatic pressure then acts along the local z axis)", 0.0, "deg", bounds="(-90, 90)", hint="degrees, not radians")
+                                "hydrostatic pressure then acts along the local z axis)", 0.0, "deg", bounds="(-90, 90)", hint="degrees, not radians")
     clip_circle: Optional[Tuple[float, ...]] = scene_key(
         "2D: [x, y, radius]: keep only the lattice points at least dp/2 inside this circle (a drum's fill)", None, "m", bounds="[-1e5, 1e5]")
 
@@ -143,7 +143,7 @@ class _Obstacle:
     origin: Optional[Tuple[float, ...]] = scene_key("the local frame's origin (default the global origin)", None, "m",
                      bounds="[-1e5, 1e5]")
     tilt_deg: float = scene_key("slope of the local x axis below the horizontal (about y; +: x' descends)", 0.0,
-                           "deg", bounds="(-90, 90)", hint="degrees, not radians")
+                                "deg", bounds="(-90, 90)", hint="degrees, not radians")
     friction_angle_deg: Optional[float] = scene_key(
         "dynamic boundaries: Coulomb friction angle delta between the material and this boundary "
         "(|wall shear force| <= tan(delta) |wall normal force|); default none: the wall resists shear "
@@ -162,7 +162,7 @@ class _Obstacle:
 class ChuteSegment:
     length: float = scene_key("length along the slope", unit="m", bounds="(0, 1e4]")
     slope_deg: float = scene_key("inclination below the horizontal (+: descends along +x)", unit="deg", bounds="(-90, 90)",
-                            hint="degrees, not radians")
+                                 hint="degrees, not radians")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -278,7 +278,7 @@ class DrumObstacle(_Obstacle):
     shape: Literal["drum"] = scene_key("obstacle kind", "drum")
     radius: float = scene_key("inner radius R of the drum", unit="m", bounds="(0, 1e3]")
     angular_velocity: float = scene_key("omega, rotation rate, counter-clockwise positive (rad/s, not rpm)", unit="rad/s",
-                                   bounds="[-100, 100]", hint="rad/s, not rpm: 1 rpm = 0.1047 rad/s")
+                                        bounds="[-100, 100]", hint="rad/s, not rpm: 1 rpm = 0.1047 rad/s")
     dimensions = (2,)
 
     def check(self, path: str, dim: int) -> None:

@@ -98,10 +98,7 @@ class Scene:
         for name, (asked, key, why) in MODEL_NUMERICS.items():  # a model-specific key set for a model without it
             if asked(self.numerics) and name not in material.numerics_read:
                 raise ConfigError(key, f"{why}; material.model: {self.material.model} does not have it")
-        if self.numerics.viscosity == "implicit":  # asked for: must fit
-            if self.numerics.integrator != "symplectic_verlet":
-                raise ConfigError("numerics.viscosity", "the implicit viscous update runs in the symplectic Verlet "
-                                                        "kick; set numerics.integrator: symplectic_verlet")
+        self.material.check_scene(self)
         if self.run.guard == "stage" and self.run.guard_every > 1:
             raise ConfigError("run.guard_every", "run.guard: stage checks after every stage of every step; "
                                                  "set run.guard_every: 1 (or run.guard: step)")

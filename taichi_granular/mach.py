@@ -35,21 +35,16 @@ MACH_TARGET = 0.8  # the advice aims at this fraction of run.mach_warning (margi
 def speed_scale(scene: Scene) -> Optional[Tuple[float, str]]:
     """(expected flow speed [m/s], where it comes from), or None where no scale is known:
 
-    - a mu(I) layer periodic along a slope in the steady range: the [M56] surface speed;
+    - the speed the material's model predicts for the scene (``speed_scale``: a mu(I) layer
+      periodic along a slope in the steady range, the [M56] surface speed);
     - otherwise the fastest of free fall from the top of the material to the bottom of the
       domain sqrt(2 g H), the blocks' initial velocities and a drum's rim speed |omega| R.
     """
-    from .validation.inclined_plane import analytic_velocity
-
+    predicted = scene.material.speed_scale(scene)
+    if predicted is not None:
+        return predicted
     dim = scene.dimension
     g = scene.gravity.magnitude
-    material = scene.material
-    slope = math.radians(scene.gravity.tilt_deg)
-    if material.model == "mu_i" and "x" in scene.domain.periodic and scene.gravity.tilt_deg > 0.0:
-        if material.mu_s < math.tan(slope) < material.mu_2:
-            height = max(b.upper[dim - 1] for b in scene.particles) - min(b.lower[dim - 1] for b in scene.particles)
-            speed = float(analytic_velocity(height, height, material, slope, g))
-            return speed, f"[M56] surface speed of the {height:g} m layer"
     candidates = []
     if g > 0.0:
         top = max(max(c[dim - 1] for c in b.corners()) for b in scene.particles)

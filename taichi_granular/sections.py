@@ -18,7 +18,7 @@ class Domain:
     upper: Tuple[float, ...] = scene_key("upper corner of the box", unit="m", bounds="[-1e5, 1e5]")
     periodic: Tuple[str, ...] = scene_key("periodic axes, e.g. [x]", ())
     outflow: bool = scene_key("open faces: material leaving the box is taken out of the flow and counted "
-                         "(physics/outflow.py) instead of stopping the run", False)
+                              "(physics/outflow.py) instead of stopping the run", False)
 
     def check(self, path: str, dim: int) -> None:
         check_vector(f"{path}.lower", self.lower, dim)
@@ -50,9 +50,9 @@ class Gravity:
     """
 
     magnitude: float = scene_key("magnitude of gravitational acceleration", 9.81, "m/s^2", bounds="[0, 1000]",
-                            hint="m/s^2: 9.81 on Earth, up to 100 g in a centrifuge")
+                                 hint="m/s^2: 9.81 on Earth, up to 100 g in a centrifuge")
     tilt_deg: float = scene_key("slope angle: tilt of gravity towards +x", 0.0, "deg", bounds="(-90, 90)",
-                           hint="degrees, not radians")
+                                hint="degrees, not radians")
 
     def vector(self, dim: int) -> Tuple[float, ...]:
         t = math.radians(self.tilt_deg)
@@ -80,7 +80,7 @@ class ArtificialStress:
     models with a stress tensor; epsilon = 0 removes the stage altogether."""
 
     epsilon: float = scene_key("epsilon of R_a = -epsilon sigma_a/rho^2 for tensile principal stresses (0 = off; "
-                          "Gray et al. use 0.3)", 0.0, "-", bounds="[0, 1]")
+                               "Gray et al. use 0.3)", 0.0, "-", bounds="[0, 1]")
     exponent: float = scene_key("n of the weight (W(r)/W(dp))^n", 4.0, "-", bounds="[1, 8]")
 
     @property
@@ -97,7 +97,7 @@ class ParticleShifting:
     coefficient = 0 removes the stage altogether."""
 
     coefficient: float = scene_key("zeta in dr = -zeta h c dt grad C (0 = off; 0.2 keeps sheared layers ordered)",
-                              0.2, "-", bounds="[0, 1]")
+                                   0.2, "-", bounds="[0, 1]")
     free_surface_threshold: float = scene_key(
         "particles whose kernel sum (Shepard) falls below this are on the free surface (shift along it only)",
         0.9, "-", bounds="[0.5, 1]")
@@ -114,7 +114,7 @@ class ParticleShifting:
 @dataclass(frozen=True, kw_only=True)
 class Numerics:
     particle_spacing: float = scene_key("dp, initial lattice spacing of particles", unit="m", bounds="[1e-5, 10]",
-                                   hint="metres")
+                                        hint="metres")
     smoothing_length_ratio: float = scene_key("h/dp", 1.3, "-", bounds="[1, 3]")
     smoothing_function: Literal["wendland_c2", "wendland_c6", "cubic_spline"] = scene_key(
         "SPH smoothing function (MODEL.md section 0)", "wendland_c2")
@@ -134,7 +134,7 @@ class Numerics:
         "update; against 1e-6, 1e-4 moves the velocities of a collapse by 5e-4 of their largest, measured)",
         1e-4, "-", bounds="[1e-14, 0.1]")
     viscous_max_iterations: int = scene_key("implicit viscosity: the most BiCGSTAB iterations of one solve; a solve "
-                                       "that needs more stops the run", 200, bounds="[1, 1e5]")
+                                            "that needs more stops the run", 200, bounds="[1, 1e5]")
     viscous_picard_iterations: int = scene_key(
         "implicit viscosity: solves per step; after each but the last the strain rate and the viscosity are "
         "re-evaluated at the mid-step velocity (v(n) + v(n+1))/2 (Picard iteration on eta, which one solve "
@@ -164,9 +164,9 @@ class Numerics:
         "largest relative change |dT_s/dt| dt / |T_s| of the frictional stress in one step, a time-step bound "
         "(hypoplastic model only; 0 = off; physics/rheology/hypoplastic/model.py)", 0.0, "-", bounds="[0, 10]")
     particle_shifting: ParticleShifting = scene_key("particle shifting against particle-scale disorder",
-                                               ParticleShifting())
+                                                    ParticleShifting())
     artificial_stress: ArtificialStress = scene_key("artificial stress against the tensile instability (models with "
-                                               "a stress tensor)", ArtificialStress())
+                                                    "a stress tensor)", ArtificialStress())
     min_time_step: float = scene_key("the run stops if the stable time step falls below this", 1e-9, "s", bounds="(0, 0.1]")
 
     @property
@@ -240,9 +240,9 @@ class Render:
     frames: bool = scene_key("write a PNG frame at every output time of a run", True)
     width: int = scene_key("image width", 800, "px", bounds="[32, 8192]")
     height: Optional[int] = scene_key("image height (default: 2D from the view's aspect, 3D 3/4 of the width)", None,
-                                 "px", bounds="[32, 8192]")
+                                      "px", bounds="[32, 8192]")
     colour_by: str = scene_key("particle field to colour by: speed, pressure, inertial_number, any output field "
-                          "(vectors by magnitude)", "speed")
+                               "(vectors by magnitude)", "speed")
     range: Optional[Tuple[float, float]] = scene_key("fixed colour range [min, max] (default: each frame's own)", None,
                     bounds="[-1e15, 1e15]")
     view_lower: Optional[Tuple[float, ...]] = scene_key("2D: lower corner of the view (default domain)", None, "m",

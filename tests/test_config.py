@@ -102,7 +102,7 @@ def test_overrides_index_lists():
 
 
 @pytest.mark.parametrize("scene, overrides, key, words", [
-    ("mu_i/collapse_a0_90.yaml", ["walls.0.type=dynamic"], "walls[0].type", "ghost walls"),
+    ("mu_i/collapse_a0_90.yaml", ["walls.0.type=extrapolated"], "walls[0].type", "ghost particles"),
     ("mu_i/collapse_a0_90.yaml", ["numerics.stress_diffusion=0.1"], "numerics.stress_diffusion", "mu_i does not have it"),
     ("mu_i/collapse_a0_90.yaml", ["numerics.bulk_viscosity=0.1"], "numerics.bulk_viscosity", "mu_i does not have it"),
     ("elastoplastic/collapse3d_a0_90_coarse.yaml", ["numerics.viscosity=implicit"], "numerics.viscosity",
@@ -120,10 +120,16 @@ def test_what_a_model_does_not_support_is_named(scene, overrides, key, words):
 
 
 def test_obstacles_a_model_does_not_support_are_named():
-    data = yaml.safe_load(config_path("mu_i/collapse_a0_90.yaml").read_text())
+    """The hypoplastic model has the drum only; a mu(I) scene's obstacles are dynamic boundary
+    particles, so its walls must be too (no ghost walls beside them)."""
+    data = yaml.safe_load(config_path("hypoplastic/collapse_a0_55.yaml").read_text())
     data["obstacles"] = [{"shape": "box", "lower": [0.5, 0.0], "upper": [0.6, 0.05]}]
     with pytest.raises(ConfigError) as err:
         scene_from_dict(data)
-    assert str(err.value).startswith("obstacles[0].shape:") and "supports the obstacles: none" in str(err.value)
+    assert str(err.value).startswith("obstacles[0].shape:") and "supports the obstacles: drum" in str(err.value)
+    data = yaml.safe_load(config_path("mu_i/collapse_a0_90.yaml").read_text())
+    data["obstacles"] = [{"shape": "box", "lower": [0.5, 0.0], "upper": [0.6, 0.05]}]
+    with pytest.raises(ConfigError, match="every wall of the scene must then be of type dynamic"):
+        scene_from_dict(data)
     drum = yaml.safe_load(config_path("hypoplastic/drum_omega1.yaml").read_text())
     assert scene_from_dict(drum).obstacles[0].shape == "drum"

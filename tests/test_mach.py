@@ -10,7 +10,7 @@ from taichi_granular.cli import main
 from taichi_granular.config import load_scene
 from taichi_granular.mach import MACH_TARGET, speed_scale
 from taichi_granular.paths import config_path
-from taichi_granular.validation.inclined_plane import analytic_velocity
+from taichi_granular.physics.rheology.mu_i.steady import analytic_velocity
 
 INCLINE = config_path("mu_i/inclined_plane.yaml")
 

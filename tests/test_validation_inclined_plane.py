@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 
 from scenes import build, layer
+from taichi_granular.physics.rheology.mu_i import steady
 from taichi_granular.validation import inclined_plane as ip
 
 
@@ -12,21 +13,21 @@ def synthetic_frames(scene, scale_velocity=1.0, scale_pressure=1.0, n_frames=5):
     material = scene.material
     slope = math.radians(scene.gravity.tilt_deg)
     dp = scene.numerics.particle_spacing
-    phi_u = ip.steady_solid_fraction(material, slope)
+    phi_u = steady.steady_solid_fraction(material, slope)
     length = scene.domain.size[0]
     rows, cols = 20, int(round(length / dp))
     mass = phi_u * material.grain_density * dp * dp
-    height = ip.steady_height(mass * rows * cols / length, material, slope, 9.81)
+    height = steady.steady_height(mass * rows * cols / length, material, slope, 9.81)
     z = (np.arange(rows) + 0.5) * height / rows
     x = (np.arange(cols) + 0.5) * dp
     X, Z = np.meshgrid(x, z)
     pos = np.stack([X.ravel(), Z.ravel()], axis=1)
     n = len(pos)
     vel = np.zeros((n, 2))
-    vel[:, 0] = scale_velocity * ip.analytic_velocity(pos[:, 1], height, material, slope, 9.81)
+    vel[:, 0] = scale_velocity * steady.analytic_velocity(pos[:, 1], height, material, slope, 9.81)
     frame = {"position": pos, "velocity": vel, "mass": np.full(n, mass), "is_wall": np.zeros(n, int),
              "density": np.full(n, mass / (dp * height / rows)),
-             "pressure": scale_pressure * ip.analytic_pressure(pos[:, 1], height, material, slope, 9.81),
+             "pressure": scale_pressure * steady.analytic_pressure(pos[:, 1], height, material, slope, 9.81),
              "solid_fraction": np.full(n, phi_u)}
     return [0.1 * k for k in range(n_frames)], [frame] * n_frames
 
@@ -69,9 +70,9 @@ def test_perturbed_frames_score_their_error(scene):
 
 def test_steady_inertial_number_and_range(scene):
     material = scene.material
-    assert ip.steady_inertial_number(material, math.radians(25.0)) == pytest.approx(0.1330, abs=2e-4)
+    assert steady.steady_inertial_number(material, math.radians(25.0)) == pytest.approx(0.1330, abs=2e-4)
     with pytest.raises(ValueError, match="outside the steady range"):
-        ip.steady_inertial_number(material, math.radians(35.0))
+        steady.steady_inertial_number(material, math.radians(35.0))
 
 
 def test_reduced_inclined_plane_holds_the_analytic_profile():

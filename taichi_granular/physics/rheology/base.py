@@ -31,6 +31,15 @@ class MaterialParameters:
     def check(self, path: str) -> None:
         """Relations between keys (each key's own range is checked by keys.check_numbers)."""
 
+    def check_scene(self, scene) -> None:
+        """What the model needs from the rest of a scene beyond the declarations above (numerics
+        it cannot run with): a ConfigError naming the key."""
+
+    def speed_scale(self, scene):
+        """The flow speed the model predicts for this scene (m/s, and where it comes from), or
+        None (mach.py then takes free fall and the scene's own speeds)."""
+        return None
+
     @property
     def reference_density(self) -> float:
         """Bulk density of the material at rest and unstressed  [kg/m^3]."""

@@ -27,9 +27,9 @@ class ElastoplasticMaterial(MaterialParameters):
     youngs_modulus: float = scene_key("E, Young's modulus [A6]", unit="Pa", bounds="[1e3, 1e12]")
     poisson_ratio: float = scene_key("nu, Poisson's ratio [A6]", unit="-", bounds="[0, 0.5)")
     friction_angle_deg: float = scene_key("phi, internal friction angle of the Mohr-Coulomb strength", unit="deg",
-                                     bounds="[0, 90)", hint="degrees, not radians")
+                                          bounds="[0, 90)", hint="degrees, not radians")
     cohesion: float = scene_key("c of S_f = c + p tan(phi) (0 for dry sand; of the order of E keeps the material "
-                           "elastic)", 0.0, "Pa", bounds="[0, 1e12]")
+                                "elastic)", 0.0, "Pa", bounds="[0, 1e12]")
     bulk_modulus: Optional[float] = scene_key(
         "K of p = K (rho/rho_0 - 1) [A5]; default 50 rho_0 g H_max, H_max the tallest block", None, "Pa", bounds="(0, 1e12]")
 

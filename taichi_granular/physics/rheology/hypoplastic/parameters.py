@@ -44,9 +44,9 @@ class HypoplasticMaterial(MaterialParameters):
         "a parameter table of [P] supplying the constants below (set1, set2, annular)", None)
     grain_density: float = scene_key("rho_s, density of the grain material", unit="kg/m^3", bounds="[100, 25000]")
     grain_diameter: float = scene_key("d, grain diameter of the Bagnold stress", unit="m", bounds="(0, 0.05]",
-                                 hint="metres: 3 mm = 3e-3")
+                                      hint="metres: 3 mm = 3e-3")
     initial_void_ratio: float = scene_key("e_0, void ratio at t = 0 (bulk density rho_s/(1 + e_0))", unit="-",
-                                     bounds="(0, 5]")
+                                          bounds="(0, 5]")
     constants: Optional[Tuple[float, ...]] = scene_key("c1, c2, c3, c4 of the Wu-Bauer-Kolymbas rate law", None, "-",
                         bounds="[-1e5, 1e5]")
     min_void_ratio: Optional[float] = scene_key("e_min of D_c = (e - e_min)/(e_crt - e_min)", None, "-", bounds="(0, 5]")
@@ -58,9 +58,9 @@ class HypoplasticMaterial(MaterialParameters):
     dispersion_angle_deg: Optional[float] = scene_key(
         "alpha_i, p_v = tau_v/tan(alpha_i) of the Bagnold stress", None, "deg", bounds="(0, 90)", hint="degrees, not radians")
     wave_speed: float = scene_key("c of the time step dt = chi h/c (chi: numerics.cfl) and of the artificial "
-                             "viscosity [P]", 80.0, "m/s", bounds="[1, 1e4]", hint="m/s; [P] uses 80")
+                                  "viscosity [P]", 80.0, "m/s", bounds="[1, 1e4]", hint="m/s; [P] uses 80")
     tension_guard: float = scene_key("eps: where tr T_s > -eps, T_s is reset to -(eps/3) I (choice, MODEL.md section 2)",
-                                1.0, "Pa", bounds="(0, 1e4]", hint="Pa: a few")
+                                     1.0, "Pa", bounds="(0, 1e4]", hint="Pa: a few")
 
     def __post_init__(self):
         if self.parameter_set is not None:

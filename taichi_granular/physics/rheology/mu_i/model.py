@@ -160,15 +160,23 @@ class MuIRheology(Model):
 
     @ti.func
     def deviatoric_stress(self, k):
-        """s of particle k, from its stored velocity gradient and viscosity  [Pa]."""
-        return self.viscous_stress(self.state.viscosity[k], self.state.velocity_gradient[k])
+        """s of particle k, from its stored velocity gradient and viscosity; a dynamic boundary
+        particle has neither and carries none of its own (walls/dynamic.py lends it the facing
+        grain's)  [Pa]."""
+        s = ti.Matrix.zero(float, self.dim, self.dim)
+        if k < self.state.n_material:
+            s = self.viscous_stress(self.state.viscosity[k], self.state.velocity_gradient[k])
+        return s
 
     # ---- wave speed and time step -----------------------------------------------------------
 
     @ti.func
     def sound_speed(self, k):
-        """c = (K_t phi rho_s0)^(-1/2), from dp/drho at fixed solid fraction phi = rho/rho_s  [m/s]."""
-        phi = self.state.density[k] / self.state.grain_density[k]
+        """c = (K_t phi rho_s0)^(-1/2), from dp/drho at fixed solid fraction phi = rho/rho_s; a
+        dynamic boundary particle (no grain density of its own) at phi_max  [m/s]."""
+        phi = self.phi_max
+        if k < self.state.n_material:
+            phi = self.state.density[k] / self.state.grain_density[k]
         return 1.0 / ti.sqrt(self.K_t * phi * self.rho_s0)
 
     @ti.func
@@ -228,7 +236,10 @@ class MuIRheology(Model):
 
 @ti.data_oriented
 class GrainDensityPressure(Stage):
-    """EOS stage: rho_s from [M44], then p from [M41], for every material particle."""
+    """EOS stage: rho_s from [M44], then p from [M41], for every material particle; and for the
+    dynamic boundary particles, whose density evolves (walls/dynamic.py), the pressure of [M44] at
+    rest (gamma_dot = 0: p = (rho/(phi_max rho_s0) - 1)/K_t, zero below phi_max rho_s0), so that
+    a wall pushes back as the packed grains would and never pulls."""
 
     name = "grain_density_pressure"
     category = "eos"
@@ -242,6 +253,10 @@ class GrainDensityPressure(Stage):
             last = ti.sqrt(ti.max(self.state.grain_density[i] / self.model.rho_s0 - 1.0, 0.0))
             t = self.model.grain_compression(rho_star, self.state.strain_rate[i], last)
             self.state.grain_density[i] = self.model.rho_s0 * (1.0 + t * t)
+            self.state.pressure[i] = self.model.pressure_of(t)
+        ti.loop_config(serialize=runtime.serial_loops)
+        for i in range(self.state.n_material, self.state.density_rate.shape[0]):  # none without dynamic walls
+            t = self.model.grain_compression(self.state.density[i] / self.model.rho_s0, 0.0)
             self.state.pressure[i] = self.model.pressure_of(t)
 
 
