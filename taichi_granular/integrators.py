@@ -54,12 +54,6 @@ class _Update(Stage):
             self.block_mass = ti.field(float, n_blocks)
             self.mean_correction = ti.Vector.field(ctx.state.dim, float, ())
 
-    def full_step(self, dt: float, scheme) -> None:
-        """The kick, the implicit viscous solve where the scene has one, the drift."""
-        scheme.profiler(self, launcher(self, "kick"), dt)
-        scheme.solve_viscosity()
-        scheme.profiler(self, launcher(self, "drift"), dt)
-
     @ti.func
     def wrap(self, i):
         self.state.position[i] = self.grid.wrap(self.state.position[i])
@@ -171,10 +165,14 @@ class SymplecticVerlet(_Update):
         evaluate_rates()
 
     def step(self, dt: float, scheme) -> None:
-        scheme.profiler(self, launcher(self, "half_step"), dt)
+        """The algorithm of a step, as run and as ``describe`` lists it (Scheme.stage_list records
+        these calls)."""
+        scheme.run(self, launcher(self, "half_step"), dt)  # x, v, rho to n+1/2 with a(n-1/2)
         scheme.after_move(0.5)
-        scheme.evaluate_rates()
-        self.full_step(dt, scheme)
+        scheme.evaluate_rates()  # a(n+1/2), d rho/dt(n+1/2)
+        scheme.run(self, launcher(self, "kick"), dt)  # v(n+1)
+        scheme.solve_viscosity()  # the implicit viscous update of v(n+1), where the scene has one
+        scheme.run(self, launcher(self, "drift"), dt)  # x(n+1), rho(n+1), the particle shift
         scheme.after_move()
 
 
@@ -195,11 +193,14 @@ class PredictorCorrector(_Update):
         evaluate_rates()
 
     def step(self, dt: float, scheme) -> None:
-        scheme.evaluate_rates()
-        scheme.profiler(self, launcher(self, "half_step"), dt)
+        """The algorithm of a step, as run and as ``describe`` lists it."""
+        scheme.evaluate_rates()  # rates at n
+        scheme.run(self, launcher(self, "half_step"), dt)  # predictor: x, v, rho to n+1/2
         scheme.after_move(0.5)
-        scheme.evaluate_rates()
-        self.full_step(dt, scheme)
+        scheme.evaluate_rates()  # rates at n+1/2
+        scheme.run(self, launcher(self, "kick"), dt)  # corrector: v(n+1) from v(n)
+        scheme.solve_viscosity()
+        scheme.run(self, launcher(self, "drift"), dt)  # x(n+1), rho(n+1)
         scheme.after_move()
 
 

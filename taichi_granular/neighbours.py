@@ -418,6 +418,7 @@ class NeighbourSearch(Stage):
     """Rebuild the cell lists at the current positions."""
 
     name = "neighbour_search"
+    slot = "neighbours"
     category = "neighbours"
     equation = "cell-linked list"
 

@@ -21,7 +21,7 @@ from .physics.implicit_viscosity import ImplicitViscosity
 from .physics.outflow import Outflow
 from .physics.rheology import model_class
 from .physics.shifting import FreeSurface, ParticleShifting
-from .physics.stage import Context, fuse_pair_stages
+from .physics.stage import MOVE_SLOTS, RATE_SLOTS, Context, fuse_pair_stages, in_slot_order
 from .physics.walls import BOUNDARIES, NoWalls
 from .profiling import StageProfiler
 from .scene import InitialParticles, build_initial
@@ -41,24 +41,33 @@ def boundary_class(scene: Scene):
 
 
 def rate_stage_classes(scene: Scene, model) -> List[type]:
-    """Stages of one rate evaluation, in order."""
-    classes = [NeighbourSearch] + GRADIENTS[scene.numerics.gradient_correction].stage_classes()
-    if scene.numerics.particle_shifting.enabled or model.needs_free_surface:
+    """Stages of one rate evaluation: what the numerics, the walls and the model bring, in the
+    order of their slots (physics/stage.py RATE_SLOTS)."""
+    numerics = scene.numerics
+    classes = [NeighbourSearch] + GRADIENTS[numerics.gradient_correction].stage_classes()
+    if numerics.particle_shifting.enabled or model.needs_free_surface:
         classes.append(FreeSurface)
-    walls_cls = boundary_class(scene)
-    classes += walls_cls.stage_classes(scene)
-    model_classes = model.stage_classes(scene)
-    # boundary stresses extrapolated from the material's: after its stress, before the first force
-    first_force = next((k for k, c in enumerate(model_classes) if c.category == "forces"), len(model_classes))
-    classes += model_classes[:first_force] + walls_cls.stress_stage_classes(scene) + model_classes[first_force:]
-    if scene.numerics.artificial_viscosity.enabled:
+    classes += boundary_class(scene).stage_classes(scene) + model.stage_classes(scene)
+    if numerics.artificial_viscosity.enabled:
         classes.append(ArtificialViscosity)
-    if scene.numerics.artificial_stress.enabled:
+    if numerics.artificial_stress.enabled:
         classes.append(ArtificialStress)
-    classes += walls_cls.force_stage_classes(scene)  # after every other force
-    if scene.numerics.particle_shifting.enabled:
+    if numerics.particle_shifting.enabled:
         classes.append(ParticleShifting)
-    return classes
+    return in_slot_order(classes, RATE_SLOTS)
+
+
+def move_stage_classes(scene: Scene, model) -> List[type]:
+    """Stages after every move of the particles, in the order of their slots (MOVE_SLOTS)."""
+    classes = ([Outflow] if scene.domain.outflow else []) + boundary_class(scene).position_stage_classes(scene) \
+        + model.update_stage_classes()
+    return in_slot_order(classes, MOVE_SLOTS)
+
+
+def _describe_call(stage, fn) -> str:
+    """'integrator: kick [integration]' for a kernel of a stage launched by name (launch.py)."""
+    kernel = getattr(getattr(fn, "kernel", None), "func", fn)
+    return f"{stage.name}: {getattr(kernel, '__name__', 'call').strip('_').replace('_', ' ')} [{stage.category}]"
 
 
 @ti.data_oriented
@@ -102,10 +111,9 @@ class Scheme:
         rate_classes = rate_stage_classes(scene, model)
         integrator_cls = INTEGRATORS[scene.numerics.integrator]
         gradient_cls = GRADIENTS[scene.numerics.gradient_correction]
+        move_classes = move_stage_classes(scene, model)
         specs = merge_specs([model.fields, walls_cls.fields, integrator_cls.fields, gradient_cls.fields]
-                            + [cls.fields for cls in rate_classes + model.update_stage_classes()
-                               + walls_cls.position_stage_classes(scene)]
-                            + ([Outflow.fields] if scene.domain.outflow else [])
+                            + [cls.fields for cls in rate_classes + move_classes]
                             + ([ImplicitViscosity.fields] if scene.implicit_viscosity else []))
         ini = self.initial
         runtime.choose_loops(ini.n_total)
@@ -127,6 +135,7 @@ class Scheme:
         self.clock = Clock()
         self.dt, self.time, self.step_fraction = self.clock.dt, self.clock.time, self.clock.step_fraction
         self._step = (0.0, 0.0)  # (t, dt) of the step being taken
+        self._recording = None  # the stage descriptions a step's calls leave, while stage_list records
         ctx = Context(state=self.state, grid=self.grid, smoothing=self.smoothing, walls=self.walls,
                       model=model, scene=scene, time_step=self.dt, time=self.time,
                       step_fraction=self.step_fraction)
@@ -143,23 +152,30 @@ class Scheme:
             refresh = self.rate_stages[names.index("strain_rate"):names.index("regularised_viscosity") + 1]
             self.viscous_solve = ImplicitViscosity(ctx, momentum, refresh)
         # after every update: walls act on the new positions, the model on the new state
-        outflow = [Outflow] if scene.domain.outflow else []
-        self.position_stages = [cls(ctx) for cls in outflow + walls_cls.position_stage_classes(scene)
-                                + model.update_stage_classes()]
+        self.position_stages = [cls(ctx) for cls in move_classes]
         self.time_step = StableTimeStep(ctx)
         self.reorder_every = scene.numerics.reorder_every
         self.particle_order = ParticleOrder(self.state) if self.reorder_every > 0 else None
 
     # ---- stepping -----------------------------------------------------------------------------
 
+    def run(self, stage, fn=None, *args) -> None:
+        """Run one stage (``fn(*args)``, by default ``stage.run()``) through the profiler, or, while
+        :meth:`stage_list` records a step, note it and run nothing: every launch of a step passes
+        here, so the stage list is the step's own sequence."""
+        if self._recording is not None:
+            self._recording.append(stage.describe() if fn is None else _describe_call(stage, fn))
+        else:
+            self.profiler(stage, fn, *args)
+
     def evaluate_rates(self) -> None:
         for stage in self.rate_passes:
-            self.profiler(stage)
+            self.run(stage)
 
     def solve_viscosity(self) -> None:
         """The implicit viscous update of the velocities after the kick, where the scene asks for it."""
         if self.viscous_solve is not None:
-            self.profiler(self.viscous_solve)
+            self.run(self.viscous_solve)
 
     def solver_statistics(self) -> dict:
         """Columns for diagnostics.csv from the solves since the last call (none without one)."""
@@ -173,9 +189,10 @@ class Scheme:
         """Stages that act on positions right after the integrator moves particles to
         t + fraction dt of the step being taken (moving walls go there too)."""
         t, dt = self._step
-        self.clock.move_to(t + fraction * dt, fraction)
+        if self._recording is None:
+            self.clock.move_to(t + fraction * dt, fraction)
         for stage in self.position_stages:
-            self.profiler(stage)
+            self.run(stage)
 
     def place(self, t: float) -> None:
         """Position stages at time t without a step (a resumed run's loaded state)."""
@@ -188,7 +205,7 @@ class Scheme:
         memory (a shuffled order cost 2.1-3.4x a step, measured). Keyed to the step count, so a
         resumed run reorders at the same steps as the uninterrupted one."""
         if self.particle_order is not None and step > 0 and step % self.reorder_every == 0:
-            self.profiler(self.particle_order, self.reorder)
+            self.run(self.particle_order, self.reorder)
 
     def reorder(self) -> None:
         """Sort the material by neighbour cell now (needs numerics.reorder_every > 0)."""
@@ -205,31 +222,29 @@ class Scheme:
 
     def step(self, dt: float, t: float = 0.0) -> None:
         """Advance from time t by dt."""
-        self.clock.begin_step(dt)  # stages that act over one step (wall friction) read it
+        if self._recording is None:
+            self.clock.begin_step(dt)  # stages that act over one step (wall friction) read it
         self._step = (t, dt)
         self.integrator.step(dt, self)
 
     def stable_time_step(self) -> float:
-        self.profiler(self.time_step)
+        self.run(self.time_step)
         return self.time_step.value()
 
     # ---- description --------------------------------------------------------------------------
 
     def stage_list(self) -> List[str]:
-        """The stages of one time step, in order, as the integrator runs them."""
-        rates = [s.describe() for s in self.rate_passes]
-        moves = [s.describe() for s in self.position_stages]
-        integ = self.integrator
+        """The stages of one time step, in order: recorded from the calls the integrator's step
+        makes (:meth:`run`), running nothing; the run loop's reordering before the step and the
+        time step after it around them."""
+        self._recording = []
+        try:
+            self.step(0.0, self._step[0])
+        finally:
+            steps, self._recording = self._recording, None
         reorder = ([f"reorder_by_cell: counting sort of the material by neighbour cell, every "
                     f"{self.reorder_every} steps [neighbours]"] if self.particle_order is not None else [])
-        final = [f"{integ.name}: kick [integration]"] + \
-            ([self.viscous_solve.describe()] if self.viscous_solve is not None else []) + \
-            [f"{integ.name}: drift [integration]"]
-        if integ.rate_evaluations == 1:
-            steps = reorder + [f"{integ.name}: half step [integration]"] + moves + rates + final + moves
-        else:
-            steps = reorder + rates + [f"{integ.name}: predictor [integration]"] + moves + rates + final + moves
-        return steps + [self.time_step.describe()]
+        return reorder + steps + [self.time_step.describe()]
 
     def memory_bytes(self) -> int:
         itemsize = 8 if self.scene.precision == "f64" else 4

@@ -40,3 +40,25 @@ def test_fused_passes_and_verlet_list_give_the_same_flow():
     assert listed.grid.rebuilds >= 2  # the list was rebuilt while the column slumped
     assert listed.grid.rebuilds < listed.grid.builds / 5
     assert np.abs(v_listed - v_fused).max() < 1e-12 * speed
+
+
+def test_the_stage_list_is_the_step_recorded_and_runs_nothing():
+    """describe's list is recorded from the calls of the integrator's step (Scheme.run): the
+    implicit viscous solve sits between the kick and the drift, the moves after the half step
+    and after the drift, and recording it launches no kernel."""
+    from scenes import build, layer
+    from taichi_granular.launch import Launcher
+    from taichi_granular.profiling import StageProfiler
+    from taichi_granular.scheme import Scheme
+
+    data = layer(height=0.02, length=0.04, end_time=1e-3)
+    data["numerics"]["viscosity"] = "implicit"
+    scheme = Scheme(build(data), profiler=StageProfiler(True))
+    launches = Launcher.launches
+    steps = [line.split(" [")[0] for line in scheme.stage_list()]
+    assert Launcher.launches == launches and not scheme.profiler.calls
+    kick, solve, drift = (steps.index(name) for name in
+                          ("symplectic_verlet: kick", "implicit_viscosity", "symplectic_verlet: drift"))
+    assert kick < solve < drift
+    assert steps[steps.index("symplectic_verlet: half step") + 1] == "wall_impermeability"
+    assert steps[drift + 1] == "wall_impermeability" and steps[-1] == "time_step"

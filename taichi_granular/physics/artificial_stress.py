@@ -28,6 +28,7 @@ from .stage import Stage
 @ti.data_oriented
 class ArtificialStress(Stage):
     name = "artificial_stress"
+    slot = "forces"
     category = "forces"
     equation = "Gray, Monaghan & Swift 2001"
     fields = (FieldSpec("artificial_stress", "matrix", "R = -epsilon Q diag(max(sigma_a, 0)) Q^T / rho^2",

@@ -13,6 +13,7 @@ from .stage import PairStage
 @ti.data_oriented
 class ArtificialViscosity(PairStage):
     name = "artificial_viscosity"
+    slot = "forces"
     category = "forces"
     equation = "[M38]"
     reads = ("gradient_correction",)

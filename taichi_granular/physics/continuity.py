@@ -29,6 +29,7 @@ from .stage import PairStage
 @ti.data_oriented
 class Continuity(PairStage):
     name = "continuity"
+    slot = "kinematics"
     category = "density"
     equation = "[M26]"
     reads = ("gradient_correction",)

@@ -90,6 +90,7 @@ class GradientCorrection(PairStage):
     """Computes L_i for every material particle (positions and densities only)."""
 
     name = "gradient_correction"
+    slot = "correction"
     category = "neighbours"
     equation = "renormalisation [P]"
     fields = CorrectedGradient.fields

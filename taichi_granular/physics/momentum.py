@@ -156,6 +156,7 @@ class _Momentum(PairStage):
 @ti.data_oriented
 class ViscousMomentum(_Momentum):
     name = "momentum_viscous_pair"
+    slot = "forces"
     equation = "[M27]"
 
     @ti.func
@@ -188,6 +189,7 @@ class ViscousMomentum(_Momentum):
 @ti.data_oriented
 class StressMomentum(_Momentum):
     name = "momentum_stress"
+    slot = "forces"
     equation = "[A12]"
 
     def __init__(self, ctx):

@@ -18,6 +18,7 @@ from .stage import Stage
 @ti.data_oriented
 class Outflow(Stage):
     name = "outflow"
+    slot = "outflow"
     category = "walls"
     equation = "open faces"
     fields = (FieldSpec("outflow", "scalar", "1 once the particle has left the domain through an open face", "-",

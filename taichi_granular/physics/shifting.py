@@ -44,6 +44,7 @@ ANTI_CLUMPING_POWER = 4  # n of Monaghan (2000)
 @ti.data_oriented
 class ParticleShifting(PairStage):
     name = "particle_shifting"
+    slot = "shifting"
     category = "integration"
     equation = "Lind et al. (2012)"
     reads = ("kernel_sum",)
@@ -113,6 +114,7 @@ class FreeSurface(PairStage):
     ``numerics.particle_shifting.free_surface_threshold`` count as free surface."""
 
     name = "free_surface"
+    slot = "free_surface"
     category = "neighbours"
     equation = "Shepard sum"
     writes = ("kernel_sum",)

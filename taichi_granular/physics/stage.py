@@ -12,6 +12,28 @@ from ..state import FieldSpec
 # The categories of the per-stage profile, in the order a step runs them.
 CATEGORIES = ("neighbours", "density", "eos", "rheology", "forces", "walls", "integration")
 
+# The slots of a rate evaluation, in the order they run: every stage declares its slot, and the
+# scheme runs the stages that the model, the walls and the numerics bring in slot order (each
+# contributor's own order kept within a slot). RATE_SLOTS: neighbour lists and kernel
+# corrections; the free-surface flag; the boundary particles' own state (extrapolated velocity,
+# dynamic walls' density rate); the kinematics (continuity, velocity gradient); the equation of
+# state; the rheology (viscosity, stress rates, total stress); stresses carried to the walls;
+# the forces (momentum, artificial viscosity and stress); the forces that replace part of those
+# at walls (Coulomb friction); the particle shift. MOVE_SLOTS: after each move of the
+# particles, material leaving open faces, the walls' motion and impermeability, the model's
+# update of its stress.
+RATE_SLOTS = ("neighbours", "correction", "free_surface", "wall_state", "kinematics", "eos", "rheology",
+              "wall_stress", "forces", "wall_forces", "shifting")
+MOVE_SLOTS = ("outflow", "wall_motion", "update")
+
+
+def in_slot_order(classes: list, slots: tuple) -> list:
+    """``classes`` sorted into ``slots`` (stable: the order within a slot is kept)."""
+    for cls in classes:
+        if cls.slot not in slots:
+            raise ValueError(f"stage {cls.__name__} declares slot {cls.slot!r}, not one of {slots}")
+    return sorted(classes, key=lambda cls: slots.index(cls.slot))
+
 
 @dataclass
 class Context:
@@ -37,6 +59,7 @@ class Stage:
 
     name = "stage"
     category = "forces"
+    slot = None  # where in a step it runs: one of RATE_SLOTS or MOVE_SLOTS
     equation = ""
     fields: Tuple[FieldSpec, ...] = ()
 

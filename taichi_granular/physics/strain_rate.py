@@ -36,6 +36,7 @@ def velocity_gradient_term(stage: ti.template(), velocity: ti.template(), i, j, 
 @ti.data_oriented
 class StrainRate(PairStage):
     name = "strain_rate"
+    slot = "kinematics"
     category = "rheology"
     equation = "[M31]"
     fields = (FieldSpec("strain_rate", "scalar", "strain-rate modulus gamma_dot = sqrt(2 eps:eps)", "1/s",

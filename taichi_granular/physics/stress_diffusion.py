@@ -26,6 +26,7 @@ from .stage import Stage
 @ti.data_oriented
 class StressDiffusion(Stage):
     name = "stress_diffusion"
+    slot = "rheology"
     category = "rheology"
     equation = "delta-SPH on s"
 

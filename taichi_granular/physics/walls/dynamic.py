@@ -76,13 +76,10 @@ class DynamicWalls(NoWalls):
 
     @classmethod
     def stage_classes(cls, scene):
-        return [WallContinuity]
-
-    @classmethod
-    def force_stage_classes(cls, scene):
-        """Coulomb wall friction, only if some wall or obstacle has a friction angle."""
+        """The boundary particles' density rate; Coulomb wall friction only if some wall or
+        obstacle has a friction angle."""
         sources = list(scene.walls) + list(scene.obstacles)
-        return [WallFriction] if any(s.friction_angle_deg is not None for s in sources) else []
+        return [WallContinuity] + ([WallFriction] if any(s.friction_angle_deg is not None for s in sources) else [])
 
 
 @ti.data_oriented
@@ -92,6 +89,7 @@ class WallContinuity(Stage):
     the loop visits the material only)."""
 
     name = "wall_continuity"
+    slot = "wall_state"
     category = "walls"
     equation = "[A11] Dalrymple & Knio"
 
@@ -120,6 +118,7 @@ class WallFriction(PairStage):
     delta of the walls pushing (pressure-force-weighted mean where several meet)  [m/s^2]."""
 
     name = "wall_friction"
+    slot = "wall_forces"
     category = "walls"
     reads = ("gradient_correction", "velocity_gradient", "strain_rate")  # the momentum pair's
     writes = ("acceleration",)

@@ -64,11 +64,7 @@ class ExtrapolatedWalls(NoWalls):
 
     @classmethod
     def stage_classes(cls, scene):
-        return [WallVelocityExtrapolation]
-
-    @classmethod
-    def stress_stage_classes(cls, scene):
-        return [WallStressExtrapolation]
+        return [WallVelocityExtrapolation, WallStressExtrapolation]
 
 
 @ti.data_oriented
@@ -81,6 +77,7 @@ class WallVelocityExtrapolation(Stage):
     (r_w - r_f) ~ 2 omega dp, which shears the grains next to the wall without end."""
 
     name = "wall_velocity_extrapolation"
+    slot = "wall_state"
     category = "walls"
     equation = "[P] improved wall"
 
@@ -128,6 +125,7 @@ class WallStressExtrapolation(Stage):
     """sigma_w and rho_w as Shepard averages of the material, with the hydrostatic correction [P]."""
 
     name = "wall_stress_extrapolation"
+    slot = "wall_stress"
     category = "walls"
     equation = "[P] improved wall"
 
@@ -180,6 +178,7 @@ class WallRotation(Stage):
     resumed run lands exactly where it left."""
 
     name = "wall_rotation"
+    slot = "wall_motion"
     category = "walls"
     equation = "rigid rotation"
     fields = (
@@ -217,6 +216,7 @@ class DrumImpermeability(Stage):
     R - dp/4 with its outward radial velocity removed (module docstring)."""
 
     name = "drum_impermeability"
+    slot = "wall_motion"
     category = "walls"
     equation = "no-penetration"
 

@@ -43,17 +43,8 @@ class NoWalls:
 
     @classmethod
     def stage_classes(cls, scene):
-        """Stages of a rate evaluation before the model's (the boundary's own density, velocities)."""
-        return []
-
-    @classmethod
-    def stress_stage_classes(cls, scene):
-        """Stages after the model's stress, before the first force (stresses extrapolated to the wall)."""
-        return []
-
-    @classmethod
-    def force_stage_classes(cls, scene):
-        """Stages after every other force (wall friction)."""
+        """Stages of a rate evaluation (their slots place them: the boundary's own state, stresses
+        carried to the wall, wall friction)."""
         return []
 
     def __init__(self, state, gravity=None):
@@ -179,6 +170,7 @@ class WallImpermeability(Stage):
     """
 
     name = "wall_impermeability"
+    slot = "wall_motion"
     category = "walls"
     equation = "no-penetration"
 

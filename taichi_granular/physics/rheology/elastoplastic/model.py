@@ -205,6 +205,7 @@ class LinearPressure(Stage):
     (material, and dynamic boundary particles)."""
 
     name = "linear_pressure"
+    slot = "eos"
     category = "eos"
     equation = "[A5]"
 
@@ -218,6 +219,7 @@ class LinearPressure(Stage):
 @ti.data_oriented
 class JaumannStressRate(Stage):
     name = "jaumann_stress_rate"
+    slot = "rheology"
     category = "rheology"
     equation = "[A6]"
 
@@ -235,6 +237,7 @@ class PlasticCorrection(Stage):
     density [A5], then s back onto the yield surface."""
 
     name = "plastic_correction"
+    slot = "update"
     category = "rheology"
     equation = "[A Sec 4.1]"
 

@@ -363,6 +363,7 @@ class FrictionalStressUpdate(Stage):
     over dt with grad v(n+1/2) [P]. Each by the sub-stepped point ODE (module docstring)."""
 
     name = "hypoplastic_stress_update"
+    slot = "update"
     category = "rheology"
     equation = "[P] Wu-Bauer-Kolymbas"
 
@@ -393,6 +394,7 @@ class TotalStress(Stage):
     (in-plane) for the momentum equation."""
 
     name = "total_stress"
+    slot = "rheology"
     category = "rheology"
     equation = "[P] T_s + Bagnold"
 

@@ -242,6 +242,7 @@ class GrainDensityPressure(Stage):
     a wall pushes back as the packed grains would and never pulls."""
 
     name = "grain_density_pressure"
+    slot = "eos"
     category = "eos"
     equation = "[M44] [M41]"
 
@@ -265,6 +266,7 @@ class RegularisedViscosity(Stage):
     """Rheology stage: eta_hat(p, gamma_dot) of [M48]/[M55] for every material particle."""
 
     name = "regularised_viscosity"
+    slot = "rheology"
     category = "rheology"
     equation = "[M47]-[M55]"
     fields = (FieldSpec("viscosity", "scalar", "regularised viscosity eta_hat", "Pa s", "material"),)

@@ -85,6 +85,7 @@ class NewtonianModel(Model):
 @ti.data_oriented
 class LinearEquationOfState(Stage):
     name = "linear_equation_of_state"
+    slot = "eos"
     category = "eos"
     equation = "p = c^2 (rho - rho_0)"
 
