@@ -95,25 +95,8 @@ def cmd_describe(args) -> int:
 
 
 def cmd_validate(args) -> int:
-    if args.case == "inclined-plane":
-        from .validation.cli import validate_inclined_plane
-        return validate_inclined_plane(args)
-    if args.case in ("column-collapse", "column-collapse-3d", "pile-collapse"):
-        from .validation.cli import validate_column_collapse
-        return validate_column_collapse(args)
-    if args.case == "stake-rows":
-        from .validation.cli import validate_stake_rows
-        return validate_stake_rows(args)
-    if args.case == "obstacle-flow":
-        from .validation.cli import validate_obstacle_flow
-        return validate_obstacle_flow(args)
-    if args.case == "drum":
-        from .validation.cli import validate_drum
-        return validate_drum(args)
-    if args.case == "element-tests":
-        from .validation.cli import validate_element_tests
-        return validate_element_tests(args)
-    raise AssertionError(args.case)
+    from .validation.cli import validate
+    return validate(args)
 
 
 def cmd_reference(args) -> int:
@@ -193,9 +176,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--arch", default="cpu", help="Taichi backend for rasterising")
     p.set_defaults(func=cmd_render)
 
-    p = sub.add_parser("validate", parents=[common], help="run a validation case and print its errors")
-    p.add_argument("case", help="the validation case", choices=["inclined-plane", "column-collapse", "column-collapse-3d", "pile-collapse",
-                                    "stake-rows", "obstacle-flow", "element-tests", "drum"])
+    from .validation import CASES
+    p = sub.add_parser("validate", parents=[common], help="run a validation case and print its errors",
+                       formatter_class=argparse.RawDescriptionHelpFormatter,
+                       description="cases:\n" + "\n".join(f"  {c.name:<20}{c.summary}" for c in CASES.values()))
+    p.add_argument("case", help="the validation case", choices=list(CASES))
     p.add_argument("--resolution", choices=["coarse", "paper"], default="coarse",
                    help="column-collapse-3d, stake-rows, obstacle-flow: the coarse CPU scenes or the paper's "
                         "resolution (GPU)")

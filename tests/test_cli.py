@@ -138,3 +138,19 @@ def test_every_command_and_option_has_help():
             if isinstance(action, argparse._HelpAction):
                 continue
             assert action.help and action.help != argparse.SUPPRESS, (name, action.dest)
+
+
+def test_every_validation_case_has_its_scenes_and_its_check():
+    """The registry (validation/__init__.py) is what `validate` offers: each case's module has a
+    check, and its patterns name bundled scenes at both resolutions."""
+    from types import SimpleNamespace
+    from taichi_granular.validation import CASES
+    from taichi_granular.validation.cli import _case_paths
+
+    assert set(CASES) >= {"inclined-plane", "column-collapse", "stake-rows", "drum", "element-tests"}
+    for case in CASES.values():
+        assert callable(case.module().check), case.name
+        for resolution in ("coarse", "paper"):
+            args = SimpleNamespace(cases=None, resolution=resolution)
+            assert bool(case.patterns) == bool(_case_paths(case.folder, case.patterns, args) if case.patterns
+                                               else []), (case.name, resolution)

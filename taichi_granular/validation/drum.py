@@ -154,3 +154,42 @@ def write_profile_csv(result: DrumResult, path) -> None:
     from ..output import atomic_write_text
     atomic_write_text(path, "depth_m,velocity_m_s,rigid_rotation_m_s\n" + "".join(
         f"{d:.5f},{u:.6f},{r:.6f}\n" for d, u, r in zip(result.depth, result.velocity, result.rigid_velocity)))
+
+
+# ---- the validate command's case (validation/__init__.py CASES) -------------------------------
+
+
+def check(case, runs, base, args) -> bool:
+    """Rotating drum of [P] at omega = 0.5, 1, 2 rad/s: inclination, flowing depth, flux, rigid
+    bed; writes velocity_profile.csv and .png per case."""
+    from ..render.frames import write_png
+    from ..render.plot import plot_points_and_curve
+
+    results = []
+    print(HEADER)
+    for scene, out, times, frames in runs:
+        result = evaluate_drum(scene, times, frames)
+        results.append(result)
+        write_profile_csv(result, out / "velocity_profile.csv")
+        image = plot_points_and_curve(list(zip(result.depth, result.velocity)), (result.depth, result.rigid_velocity),
+                                      "depth below the surface on the middle cross-section (m)",
+                                      "downhill velocity (m/s)", f"{scene.name}: squares sph, line rigid rotation")
+        write_png(out / "velocity_profile.png", image)
+        print(result.row(), flush=True)
+    print(f"steady window: the last {100 * STEADY_FRACTION:.0f} % of the frames; [P]: Peng et al. (2016); flux "
+          "reference: the kinematic omega (R^2 - (R - H_0)^2)/2")
+    ok = True
+    for r in results:
+        ref = r.reference
+        if ref is not None:
+            ok &= abs(r.inclination_deg - ref[0]) <= INCLINATION_TOLERANCE_DEG
+            ok &= abs(r.flowing_depth / ref[1] - 1.0) <= DEPTH_TOLERANCE
+        ok &= r.bed_departure < 0.1
+    ordered = sorted((r for r in results if r.reference is not None), key=lambda r: r.omega)
+    rising = all(a.inclination_deg < b.inclination_deg and a.flowing_depth < b.flowing_depth
+                 for a, b in zip(ordered, ordered[1:]))
+    ok &= rising
+    print(f"acceptance (inclination within {INCLINATION_TOLERANCE_DEG} deg, depth within "
+          f"{100 * DEPTH_TOLERANCE:.0f} %, both rising with omega, bed within 10 % of omega R of rigid rotation): "
+          f"{'PASS' if ok else 'FAIL'}; profiles -> {base}/<case>/velocity_profile.csv, .png")
+    return ok

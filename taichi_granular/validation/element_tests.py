@@ -299,3 +299,37 @@ def annular_shear_cell(solid_fraction: float, duration: float = 0.5, strain_step
         total = test.readings()["total_stress"]
         result.ramp.append((k, total[0, 2], -total[2, 2]))
     return result
+
+
+# ---- the validate command's case (validation/__init__.py CASES) -------------------------------
+
+
+def check(case, runs, base, args) -> bool:
+    """Element tests of the hypoplastic law (MODEL.md section 2) on a patch of particles (no
+    scene file: ``runs`` is empty); writes element_tests.csv."""
+    from ..output import atomic_write_text
+
+    runtime.init("cpu", "f64")  # a few hundred particles: the CPU is the right backend
+    print("stationary states, parameter set 1, isochoric, patch of 8^3 particles under v = L x:")
+    print(STATIONARY_HEADER)
+    stationary = stationary_states()
+    for r in stationary:
+        print(r.row(), flush=True)
+    print("annular shear cell, v_x = 2 kappa z, kappa = 10 1/s for 0.5 s (strain 10), its parameter set:")
+    annular = [annular_shear_cell(c) for c in ANNULAR_SOLID_FRACTIONS]
+    for r in annular:
+        print(r.row(), flush=True)
+    dense = annular[-1]
+    ref = ANNULAR_REFERENCE
+    print(f"C = 0.524 against [P]: sigma_xz {dense.sigma_xz:.2f} Pa ({100 * (dense.sigma_xz / ref['sigma_xz'] - 1):+.1f} %), "
+          f"sigma_zz {dense.sigma_zz:.2f} Pa ({100 * (dense.sigma_zz / ref['sigma_zz'] - 1):+.1f} %)")
+    atomic_write_text(base / "element_tests.csv", "case,value,reference,density_factor,growth\n" + "".join(
+        f"{r.name},{r.ratio:.5f},{r.reference_ratio},{r.density_factor:.5f},{r.growth:.5f}\n" for r in stationary) + "".join(
+        f"annular_C{r.solid_fraction:.3f},{r.sigma_xz:.4f},{ref['sigma_xz'] if r.residual else 0.0},"
+        f"{r.density_factor:.5f},\n" for r in annular))
+    ok_annular = all(not r.residual for r in annular[:-1]) and dense.residual
+    ok = all(r.passed for r in stationary) and ok_annular
+    print(f"acceptance (triaxial ratio within 1 %, shear ratio within 2 %, each at its I_e within 0.0015 and "
+          f"stationary; shear cell: no residual stress for C <= 0.504, residual at 0.524): "
+          f"{'PASS' if ok else 'FAIL'}; {base / 'element_tests.csv'}")
+    return ok

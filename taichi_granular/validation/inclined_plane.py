@@ -409,3 +409,46 @@ def bounding_slopes(scene: Scene, duration: float = BOUND_DURATION) -> List[Boun
         results.append(BoundingSlope(slope_deg, layer_acceleration(times, frames, n),
                                      g * (math.sin(theta) - mu * math.cos(theta))))
     return results
+
+
+# ---- the validate command's case (validation/__init__.py CASES) -------------------------------
+
+
+def prepare(args):
+    """Before the run: start from the [M56] profile (``--start analytic``) or from rest."""
+    return impose_analytic_velocity if args.start == "analytic" else None
+
+
+def check(case, runs, base, args) -> bool:
+    """mu(I) ([M56], both errors < 5 %) or hypoplastic + Bagnold (MODEL.md section 2: velocity
+    within 10 % of the Bagnold-type profile, and no steady flow outside the bounding slopes).
+    Writes profile.csv beside the run."""
+    ok = True
+    for scene, out, times, frames in runs:
+        ok &= _check_plane(scene, out, times, frames, args)
+    return ok
+
+
+def _check_plane(scene, out, times, frames, args) -> bool:
+    result = evaluate(scene, times, frames, window=args.window)
+    print(result.report())
+    write_profile_csv(result, out / "profile.csv")
+    if scene.material.model != "hypoplastic":
+        ok = result.velocity_error < 0.05 and result.pressure_error < 0.05
+        print(f"  acceptance (both errors < 5 %): {'PASS' if ok else 'FAIL'}; profile -> {out / 'profile.csv'}")
+        return ok
+    reference = reference_for(scene)
+    low, high = reference.bounding_angles_deg
+    n = int(sum(frames[0]["is_wall"] == 0))
+    window = [(t, f) for t, f in zip(times, frames) if t >= max(times) - args.window - 1e-9]
+    steady = layer_acceleration([t for t, _ in window], [f for _, f in window], n)
+    print(f"  mu_h = {reference.friction:.4f} (I_e {reference.density_factor:.4f}): steady flow between "
+          f"{low:.2f} and {high:.2f} deg; at {scene.gravity.tilt_deg:.2f} deg the layer's mean acceleration over "
+          f"the window is {steady:+.3f} m/s2")
+    bounds = bounding_slopes(scene)
+    for b in bounds:
+        print(b.row())
+    ok = result.velocity_error < 0.10 and all(b.passed for b in bounds)
+    print(f"  acceptance (velocity within 10 %, no steady flow outside the bounds): {'PASS' if ok else 'FAIL'}; "
+          f"profile -> {out / 'profile.csv'}")
+    return ok

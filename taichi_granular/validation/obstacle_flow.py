@@ -207,3 +207,32 @@ def evaluate_obstacle_flow(scene: Scene, times: Sequence[float], frames: Sequenc
                            ) -> ObstacleFlowResult:
     return ObstacleFlowResult(name=scene.name,
                               frames=[measure_flow_frame(scene, f, t) for t, f in zip(times, frames)])
+
+
+# ---- the validate command's case (validation/__init__.py CASES) -------------------------------
+
+
+def check(case, runs, base, args) -> bool:
+    """Cylinder (Cui & Gray 2013) and wedge (Tai et al. 2001) of [A]: bow shock, depth jump,
+    particle-free wake and protected zone; writes obstacle_flow.csv per case."""
+    from ..output import atomic_write_text
+
+    print(HEADER)
+    ok = True
+    for scene, out, times, frames in runs:
+        result = evaluate_obstacle_flow(scene, times, frames)
+        atomic_write_text(out / "obstacle_flow.csv", "t,upstream_depth_m,depth_jump,standoff_m,wake_length_m,"
+                          "wake_area_m2,wake_closed,protected_particles\n" + "".join(
+                              f"{f.time:.4f},{f.upstream_depth:.5f},{f.depth_jump:.3f},{f.standoff:.5f},"
+                              f"{f.wake_length:.5f},{f.wake_area:.6f},{int(f.wake_closed)},{f.protected_particles}\n"
+                              for f in result.frames))
+        print(result.row(), flush=True)
+        if "wedge" in scene.name:
+            ok &= result.shock_persists and result.protected_max == 0
+        else:
+            ok &= result.shock_persists and result.wake_persists
+    print(f"steady state: the last {100 * STEADY_FRACTION:.0f} % of the frames; shock: depth jump > "
+          f"{SHOCK_JUMP}; wedge: 'inside' counts particles within {PROTECTED_LENGTH} m behind the building")
+    print(f"acceptance (cylinder: shock and closed wake persist; wedge: shock persists, protected zone empty): "
+          f"{'PASS' if ok else 'FAIL'}; per frame -> {base}/<case>/obstacle_flow.csv")
+    return ok

@@ -141,3 +141,30 @@ def evaluate_stake_rows(scene: Scene, times: Sequence[float], frames: Sequence[D
                           area2=area2, passed=passed, upper_panel=upper, crossed=int(np.sum((height < 0.0) & ~beside)),
                           fell_off=int(np.sum(beside)),
                           front_stop_time=stop, times=list(map(float, times)), leading_edge=edges)
+
+
+# ---- the validate command's case (validation/__init__.py CASES) -------------------------------
+
+
+def check(case, runs, base, args) -> bool:
+    """Stake rows cases 1-3 of [A]: efficiency factor against Yellin et al. (2013), within
+    ACCEPTANCE_POINTS, case 2 the lowest, none crossed; writes leading_edge.csv per case."""
+    from ..output import atomic_write_text
+
+    results = []
+    print(HEADER)
+    for scene, out, times, frames in runs:
+        result = evaluate_stake_rows(scene, times, frames)
+        results.append(result)
+        atomic_write_text(out / "leading_edge.csv", "t,leading_edge_m\n" + "".join(
+            f"{t:.4f},{e:.5f}\n" for t, e in zip(result.times, result.leading_edge)))
+        print(result.row(), flush=True)
+    print(f"areas: 1 = lower panel above the first row, 2 = first row to {LEE} m past the last; efficiency = "
+          "(1 + 2)/total; reference: Yellin et al. (2013) experiment, [A] = Abdelrazek et al. SPH")
+    close = all(abs(r.error_points) <= ACCEPTANCE_POINTS and r.crossed == 0 for r in results)
+    by_case = {r.case: r.efficiency for r in results}
+    lowest = set(by_case) != set(EXPERIMENT) or min(by_case, key=by_case.get) == "case2"
+    ok = close and lowest
+    print(f"acceptance (within {100 * ACCEPTANCE_POINTS:.0f} points, case 2 lowest, none crossed): "
+          f"{'PASS' if ok else 'FAIL'}; leading edge over time -> {base}/<case>/leading_edge.csv")
+    return ok
