@@ -1,38 +1,26 @@
-"""Dynamic boundary particles (Dalrymple & Knio 2001), as used by [A] (MODEL.md section 3).
+"""Dynamic boundary particles (Dalrymple & Knio 2001), as used by [A] (MODEL.md section 3); the
+measurements behind the rules below are in docs/models/elastoplastic.md.
 
-Boundary particles stay where they are laid (staggered rows behind the wall plane, see
-scene/), but their density obeys the continuity equation [A11] with the material around them
-and their pressure the model's equation of state [A5]. Material approaching a wall compresses
-the boundary particles, their pressure rises and pushes it back: the wall holds by the same
-pressure term of the momentum equation as the material itself, with no wall-specific force.
+Boundary particles stay where they are laid (staggered rows behind the wall plane, see scene/),
+but their density obeys the continuity equation [A11] with the material around them and their
+pressure the model's equation of state [A5] (mu(I): the grain EOS at rest). Material
+approaching a wall compresses them, their pressure rises and pushes it back: the wall holds by
+the momentum equation's own pressure term, with no wall-specific force.
 
-In a pair (material i, boundary j) the boundary particle is a particle of its own: its state is
-its own (``state_index(i, j) = j``), its velocity is zero (a fixed wall), and it carries the
-pressure of its density. Its deviatoric stress is that of the material particle it faces
-(``stress_index(i, j) = i``), as a ghost's is: the wall then resists shear as the material
-next to it does (a rough wall, whose friction is the material's own, bounded by the plastic
-correction). With no deviatoric stress on the wall the stress form [A12] delivers only about
-half the wall traction for the stress of the first row, which then rises to twice the bulk
-value, reaches the yield surface first and slides: measured, a 2D layer on a 20 deg slope
-(phi = 30 deg) slid at 1-1.4 cm/s with its first row at yield, and holds with this rule.
-The pressure is cut off at the model's tension limit (p >= 0 for dry sand), so a wall never
-pulls material towards it.
+In a pair (material i, boundary j) j's state is its own (``state_index(i, j) = j``), its velocity
+zero (a fixed wall), its pressure that of its density, cut off at the model's tension limit (a
+wall never pulls). Its deviatoric stress is that of the material particle it faces
+(``stress_index(i, j) = i``): a rough wall, whose friction is the material's own, bounded by its
+strength. Without it the stress form [A12] delivers only about half the wall traction, and the
+first row reaches yield and slides.
 
-Coulomb wall friction (optional, per wall or obstacle: ``friction_angle_deg`` = delta). The
-rough rule above bounds the wall's shear resistance by the strength of the material particle it
-faces, S_f = c + p_i tan(phi). A thin or spreading layer keeps its density at the tension
-cut-off (p_i = 0), so it loses all wall friction even though its weight still presses on the
-wall through the boundary particles' own pressure: measured, an edge particle of the 3D
-a = 2.75 collapse slid away at 0.36 m/s with p = 0, and the stake-row sheet ran down the 45 deg
-panel nearly frictionless (3.85 m/s after 0.7 s). ``WallFriction`` adds the friction force of
-a Coulomb contact whose normal force is the wall's pressure force on the particle,
-f_n = -sum_w m_w (p_i/rho_i^2 + p_w/rho_w^2) grad_i W_iw, and limits the tangential force to
-tan(delta) |f_n|: it stops the tangential velocity the particle would have after the step
-(v + dt a, wall at rest) when that takes less than the limit (sticking), and otherwise opposes
-it with the limit (sliding). It acts after every other force, so "sticking" holds any load up
-to the limit exactly. Coulomb friction at walls is not in [A]; it is the basal friction
-every depth-averaged avalanche model uses and what an experimentalist measures with a tilting
-table.
+Coulomb wall friction (optional, per wall or obstacle: ``friction_angle_deg`` = delta), not in
+[A]: a sheet at the tension cut-off (p_i = 0) has no strength of its own, so the rough rule gives
+it no friction although its weight presses on the wall. ``WallFriction`` adds a Coulomb contact:
+its normal force is the boundary particles' pressure force on the particle,
+f_n = -sum_w m_w (p_i/rho_i^2 + p_w/rho_w^2) grad_i W_iw; it stops the tangential velocity the
+particle would have after the step when that takes less than tan(delta) |f_n| (sticking), and
+otherwise opposes it with that limit (sliding). It acts after every other force.
 """
 import taichi as ti
 

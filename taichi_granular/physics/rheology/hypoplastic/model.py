@@ -1,76 +1,35 @@
-"""Unified hypoplastic + Bagnold model of Peng et al. (2016) -- MODEL.md section 2.
+"""Unified hypoplastic + Bagnold model of Peng et al. (2016) -- MODEL.md section 2; the equations
+as computed here, and the measurements behind each choice, in docs/models/hypoplastic.md.
 
-In this module stress is T, **tension positive** (tr T < 0 in compression), as in the
-hypoplasticity literature; D and W are the symmetric and antisymmetric parts of grad v.
-
-Total stress T = T_s + T_v:
-- T_s, frictional, a history field integrated in time by the Wu-Bauer-Kolymbas (1996) rate
-  law with its Jaumann terms (MODEL.md section 2):
+Stress is T, **tension positive** (tr T < 0 in compression); D and W are the symmetric and
+antisymmetric parts of grad v. Total stress T = T_s + T_v:
+- T_s, frictional, a history field: the Wu-Bauer-Kolymbas (1996) rate law with its Jaumann terms,
       T_s° = c1 (tr T_s) D + c2 tr(T_s D) T_s/tr T_s + I_e (c3 T_s^2 + c4 T_s*^2)/tr T_s ||D||,
       dT_s/dt = T_s° + W T_s - T_s W,
-  T_s* = T_s - (tr T_s/3) I, ||D|| = sqrt(D:D). Density factor I_e = (1 - a) D_c + a with
-  D_c = (e - e_min)/(e_crt - e_min), e_crt = p1 + p2 exp(p3 |tr T_s|) (>= e_min + 1e-3),
-  a = q1 + q2 exp(q3 |tr T_s|), |tr T_s| in kPa (our choice of argument, MODEL.md). The void
-  ratio is read from the density, e = rho_s/rho - 1, which the continuity equation integrates
-  (de/dt = (1 + e) tr D is the same statement).
+  I_e = (1 - a) D_c + a, D_c = (e - e_min)/(e_crt - e_min), e_crt = p1 + p2 exp(p3 |tr T_s|)
+  (>= e_min + 1e-3), a = q1 + q2 exp(q3 |tr T_s|), |tr T_s| in kPa; e = rho_s/rho - 1.
 - T_v, collisional (extended Bagnold), algebraic from the current D, never fed back into T_s:
       T_v = -k_v rho_s d^2 gamma_eq^2 cos(alpha_i) I + 2 k_v rho_s d^2 gamma_eq sin(alpha_i) D*,
-  gamma_eq = sqrt(2 D*:D*); in simple shear tau_v/p_v = tan(alpha_i) exactly (Bagnold 1954).
-- Tension guard (our choice, MODEL.md): the law divides by tr T_s, so where tr T_s > -eps
-  (a few Pa: free surface, ballistic grains) T_s is scaled back to tr T_s = -eps with its
-  direction kept, if every principal stress is compressive, and reset to -(eps/3) I otherwise
-  (MODEL.md's reset), after every sub-step. Why keep the direction: the law is homogeneous of
-  degree one in T_s, so its direction evolves on its own towards the stationary one and the
-  magnitude grows or decays with I_e. Reset to isotropic at every touch, T_s can never leave
-  the guard under fast shear (from -q I the trace rate is +I_e |c3| q ||D||, tensile, before the
-  deviator has grown): measured, rows of a flowing layer sat at the guard while their I_e
-  (0.887) called for growth, and the layer accelerated on its Bagnold stress alone.
+  gamma_eq = sqrt(2 D*:D*).
+- Tension guard (our choice): where tr T_s > -eps, T_s is scaled back to tr T_s = -eps with its
+  direction kept if every principal stress is compressive, else reset to -(eps/3) I (MODEL.md's
+  reset): the law is homogeneous of degree one in T_s, and from an isotropic state under fast
+  shear its trace rate is tensile, so a reset at every touch never lets T_s leave the guard.
 
-Time integration of T_s: the law is stiff locally. Its rate is of order (sum |c_k|) ||D|| |T_s|
-(3 327 ||D|| |T_s| with set 2), so an explicit update over the flow's time step is unstable
-once that exceeds ~2/dt: measured, a small drum (R = 5 cm, omega = 2 pi rad/s, dt 2.4e-5 s)
-blew up at 0.5 s with gamma_dot reaching 89 1/s (3 327 ||D|| dt = 5). [P]'s chi = 0.05 keeps
-dt below it at a high cost. Here T_s follows the predictor-corrector of [P] --
-T_s(1/2) from T_s(n) over dt/2 with grad v(n), T_s(n+1) from T_s(n) over dt with grad v(1/2) --
-but each of those updates integrates the point ODE dT_s/dt = f(T_s, grad v) (grad v fixed over
-the update) in sub-steps of (sum |c_k|) ||D|| dt_sub <= 1/2 (midpoint rule, tension guard after
-each). It costs no neighbour loop, and where the flow is slow it is one sub-step: the plain
-scheme of [P].
+The law is locally stiff (its rate is of order (sum |c_k|) ||D|| |T_s|): each predictor and
+corrector update integrates the point ODE dT_s/dt = f(T_s, grad v), grad v fixed over the update,
+in midpoint sub-steps of (sum |c_k|) ||D|| dt_sub <= 1/2, the guard after each; where the flow is
+slow that is one sub-step, the plain scheme of [P].
 
-Numerical bulk viscosity (``numerics.bulk_viscosity``, alpha_b; our choice, not in [P]):
-T += zeta tr(D) I with zeta = alpha_b rho c h (c the wave speed of [P]). The model has no
-equation of state: the only resistance to compaction is T_s, and at a shear rate gamma_dot T_s
-answers a change of void ratio within a strain of order one (measured by point integration,
-set 2: d ln|T_s|/d strain = +3.2 at I_e 0.900 and -2.3 at 0.920 around the stationary 0.913),
-i.e. within 1/gamma_dot, about as fast as a layer can compact or dilate under its weight. The
-coupled loop then oscillates with growing amplitude: measured on the inclined plane of
-configs/hypoplastic/ at d 5 mm, 27 deg (gamma_dot up to 66 1/s; before the direction-keeping
-guard and the residual damping below), T_s vanished wherever I_e overshot the stationary value,
-the layer compacted to e = 0.73 under its own weight, T_s jumped to 4 kPa and a grain was thrown
-out of the domain at 0.09 s; with alpha_b = 0.1 the same layer held I_e = 0.913 +- 0.001 and
-e = 0.897 (the stationary state). With the guard and the damping, and no alpha_b, the layer of
-the config (d 5 mm, 28 deg) no longer blows up but I_e swings between 0.90 and 0.93 and T_s
-twenty-fold within 0.3 s; with alpha_b = 0.5 it holds 0.913 for 1.5 s. The term acts on tr D
-only: unlike the Monaghan artificial viscosity it adds no pressure and no stress in shear (the Monaghan term with alpha = 0.1 dilated a 2 mm-grain layer at 28 deg
-to e = 1.9 within 0.1 s: its pair pressure grows with the shear rate, alpha c h rho gamma_dot
-~ 6 kPa against a weight of 0.3 kPa). It is cut where it would make the mean stress tensile
-(dilating grains at the free surface), and it brings its own time-step bound
-(stable_time_step).
+Optional, not in [P]: a numerical bulk viscosity (``numerics.bulk_viscosity``, alpha_b),
+T += alpha_b rho c h tr(D) I, on the volumetric rate only and cut where it would make the mean
+stress tensile (the model has no equation of state; T_s and the void ratio otherwise oscillate),
+with its own time-step bound; and a time-step bound on the relative change of T_s in one step
+(``numerics.stress_increment``). The momentum equation's residual damping (physics/momentum.py)
+takes this model's secant viscosity sqrt(T*:T*/2)/gamma_dot, capped at 0.1 rho c h.
 
-Residual damping: the momentum equation's pairwise damping of the velocity residual
-(physics/momentum.py; zero for quadratic velocity fields) is switched on by this model's
-``viscosity`` field, its secant viscosity sqrt(T*:T*/2)/gamma_dot capped at 0.1 rho c h
-(secant_viscosity). Without it the SPH velocity gradient's blind spot, a velocity alternating
-from one row of particles to the next, grew unopposed on the inclined plane.
-
-Checked by point integration against the stationary states of MODEL.md (tests and
-``taichi-granular validate element-tests``): isochoric triaxial compression, set 1, becomes
-stationary at I_e = 1.000 with sigma_1/sigma_3 = 2.454; undrained simple shear at I_e = 0.912
-with tau/sigma_n = 0.491.
-
-In 2D (plane strain) T_s stays 3 x 3 (its out-of-plane normal stress is not determined by the
-in-plane ones); grad v is embedded with zero out-of-plane rows. Momentum sees the in-plane part
-of T through the package's sigma = -p I + s, with p = -tr(T)/3 (3D trace) and s = T + p I.
+In 2D (plane strain) T_s stays 3 x 3 and grad v is embedded with zero out-of-plane rows; the
+momentum equation sees the in-plane part of T through sigma = -p I + s, p = -tr(T)/3, s = T + p I.
 
 Units: stresses Pa, rates 1/s, densities kg/m^3.
 """
