@@ -110,11 +110,6 @@ class Scene:
                                   f"periodic axis {name} spans {self.domain.size[a]} m, less than three kernel "
                                   f"supports (3 x {support} m)")
 
-    @property
-    def implicit_viscosity(self) -> bool:
-        """Whether the viscous term is solved implicitly (physics/implicit_viscosity.py)."""
-        return self.numerics.viscosity == "implicit"
-
     def _check_size(self) -> None:
         """What would not fit in memory fails here, before anything is allocated: the neighbour grid
         (cells of the kernel support 2h, int32-indexed) and the material blocks' particles.

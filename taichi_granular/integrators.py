@@ -41,11 +41,11 @@ class _Update(Stage):
 
     def __init__(self, ctx):
         super().__init__(ctx)
-        self.shifting = ctx.scene.numerics.particle_shifting.enabled
+        self.shifting = ctx.numerics.particle_shifting.enabled
         self.h = ctx.smoothing.h
         self.taylor_velocity = self.shifting and "velocity_gradient" in ctx.state.specs
-        self.conserve_momentum = self.taylor_velocity and ctx.scene.numerics.particle_shifting.conserve_momentum
-        self.implicit_viscosity = ctx.scene.implicit_viscosity  # physics/implicit_viscosity.py
+        self.conserve_momentum = self.taylor_velocity and ctx.numerics.particle_shifting.conserve_momentum
+        self.implicit_viscosity = ctx.numerics.implicit_viscosity  # physics/implicit_viscosity.py
         # the model's integrated tensors (the elastoplastic deviatoric stress): (field, rate, start)
         self.history = [tuple(ctx.state.field(name) for name in names) for names in ctx.model.history]
         if self.conserve_momentum:  # the Taylor correction's momentum, summed in fixed blocks (deterministic)
@@ -217,7 +217,7 @@ class StableTimeStep(Stage):
 
     def __init__(self, ctx):
         super().__init__(ctx)
-        self.cfl = ctx.scene.numerics.cfl
+        self.cfl = ctx.numerics.cfl
         self.last = float("nan")
 
     @ti.kernel

@@ -114,7 +114,7 @@ class Scheme:
         move_classes = move_stage_classes(scene, model)
         specs = merge_specs([model.fields, walls_cls.fields, integrator_cls.fields, gradient_cls.fields]
                             + [cls.fields for cls in rate_classes + move_classes]
-                            + ([ImplicitViscosity.fields] if scene.implicit_viscosity else []))
+                            + ([ImplicitViscosity.fields] if scene.numerics.implicit_viscosity else []))
         ini = self.initial
         runtime.choose_loops(ini.n_total)
         self.state = ParticleState(scene.dimension, ini.n_material, ini.n_wall, specs)
@@ -137,7 +137,8 @@ class Scheme:
         self._step = (0.0, 0.0)  # (t, dt) of the step being taken
         self._recording = None  # the stage descriptions a step's calls leave, while stage_list records
         ctx = Context(state=self.state, grid=self.grid, smoothing=self.smoothing, walls=self.walls,
-                      model=model, scene=scene, time_step=self.dt, time=self.time,
+                      model=model, numerics=scene.numerics, gravity=scene.gravity_vector, domain=scene.domain,
+                      plane_walls=scene.walls, obstacles=scene.obstacles, time_step=self.dt, time=self.time,
                       step_fraction=self.step_fraction)
         ctx.gradient = self.gradient = gradient_cls(ctx)
         self.rate_stages = [cls(ctx) for cls in rate_classes]
@@ -145,7 +146,7 @@ class Scheme:
         self.rate_passes = fuse_pair_stages(self.rate_stages, ctx) if fuse else list(self.rate_stages)
         self.integrator = integrator_cls(ctx)
         self.viscous_solve = None  # physics/implicit_viscosity.py, between the kick and the drift
-        if scene.implicit_viscosity:
+        if scene.numerics.implicit_viscosity:
             momentum = next(stage for stage in self.rate_stages if hasattr(stage, "apply_viscous"))
             # a Picard iteration re-evaluates the viscosity: the stages from the strain rate to it
             names = [stage.name for stage in self.rate_stages]

@@ -173,6 +173,11 @@ class Numerics:
     def smoothing_length(self) -> float:
         return self.particle_spacing * self.smoothing_length_ratio
 
+    @property
+    def implicit_viscosity(self) -> bool:
+        """Whether the viscous term is solved implicitly (physics/implicit_viscosity.py)."""
+        return self.viscosity == "implicit"
+
 
 @dataclass(frozen=True, kw_only=True)
 class Run:

@@ -257,7 +257,7 @@ def baseline_option(case: Case, axis: str) -> str:
     return {"smoothing": numerics.smoothing_function, "gradient_correction": numerics.gradient_correction,
             "integrator": numerics.integrator, "precision": data.get("precision", "f64"),
             "artificial_viscosity": f"alpha {numerics.artificial_viscosity.alpha:g}", "cfl": f"{numerics.cfl:g}",
-            "viscosity": "implicit" if scene.implicit_viscosity else "explicit"}[axis]
+            "viscosity": "implicit" if scene.numerics.implicit_viscosity else "explicit"}[axis]
 
 
 def plan(cases: Sequence[Case]) -> List[Run]:

@@ -36,11 +36,11 @@ class ArtificialStress(Stage):
 
     def __init__(self, ctx):
         super().__init__(ctx)
-        settings = ctx.scene.numerics.artificial_stress
+        settings = ctx.numerics.artificial_stress
         self.epsilon = settings.epsilon
         self.exponent = settings.exponent
         self.dim = ctx.state.dim
-        self.reference_kernel = float(self._kernel_at(ctx.scene.numerics.particle_spacing))
+        self.reference_kernel = float(self._kernel_at(ctx.numerics.particle_spacing))
 
     def _kernel_at(self, r: float) -> float:
         """W(dp), evaluated once in Python scope through a tiny kernel  [1/m^dim]."""

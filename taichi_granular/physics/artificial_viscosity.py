@@ -21,7 +21,7 @@ class ArtificialViscosity(PairStage):
 
     def __init__(self, ctx):
         super().__init__(ctx)
-        av = ctx.scene.numerics.artificial_viscosity
+        av = ctx.numerics.artificial_viscosity
         self.alpha, self.beta = av.alpha, av.beta
         self.h = ctx.smoothing.h
         self.eps2 = 0.01 * self.h**2

@@ -37,10 +37,10 @@ class Continuity(PairStage):
 
     def __init__(self, ctx):
         super().__init__(ctx)
-        self.diffusion = ctx.scene.numerics.density_diffusion
+        self.diffusion = ctx.numerics.density_diffusion
         self.h = ctx.smoothing.h
         self.eps2 = 0.01 * self.h**2
-        self.gravity = tuple(ctx.scene.gravity_vector)
+        self.gravity = tuple(ctx.gravity)
         self.c0 = ctx.model.reference_sound_speed()
 
     @ti.func

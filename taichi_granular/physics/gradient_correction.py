@@ -60,7 +60,7 @@ class CorrectedGradient(PlainGradient):
     def __init__(self, ctx):
         super().__init__(ctx)
         self.state, self.walls = ctx.state, ctx.walls
-        self.scalar = ctx.scene.numerics.gradient_correction == "scalar"
+        self.scalar = ctx.numerics.gradient_correction == "scalar"
 
     @classmethod
     def stage_classes(cls):
@@ -100,7 +100,7 @@ class GradientCorrection(PairStage):
         super().__init__(ctx)
         self.dim = ctx.state.dim
         self.min_determinant = CorrectedGradient.min_determinant
-        self.scalar = ctx.scene.numerics.gradient_correction == "scalar"
+        self.scalar = ctx.numerics.gradient_correction == "scalar"
 
     @ti.func
     def pair(self, i, j, x_ij, r, moment: ti.template()):

@@ -68,9 +68,9 @@ class ImplicitViscosity(Stage):
         super().__init__(ctx)
         self.momentum = momentum
         self.refresh = list(refresh)  # the rate stages that take a velocity to a viscosity (Picard)
-        self.picard_iterations = ctx.scene.numerics.viscous_picard_iterations
+        self.picard_iterations = ctx.numerics.viscous_picard_iterations
         self.time_step = ctx.time_step
-        numerics = ctx.scene.numerics
+        numerics = ctx.numerics
         self.tolerance = numerics.viscous_tolerance
         self.max_iterations = numerics.viscous_max_iterations
         dim, n = ctx.state.dim, ctx.state.n_material

@@ -55,12 +55,12 @@ class _Momentum(PairStage):
         super().__init__(ctx)
         self.dim = ctx.state.dim
         self.gravity = ti.Vector.field(self.dim, float, shape=())
-        self.gravity[None] = ctx.scene.gravity_vector
+        self.gravity[None] = ctx.gravity
         self.eps2 = 0.01 * ctx.smoothing.h**2  # keeps r^2 away from zero [M27]
-        self.implicit = ctx.scene.implicit_viscosity
+        self.implicit = ctx.numerics.implicit_viscosity
         self.time_step = ctx.time_step
         # implicit: viscosities up to the explicit limit of [M39] at the step's dt stay explicit
-        self.cap_factor = ctx.scene.numerics.cfl * 0.1 * ctx.smoothing.h**2  # eta_cap = this rho/dt [m^2]
+        self.cap_factor = ctx.numerics.cfl * 0.1 * ctx.smoothing.h**2  # eta_cap = this rho/dt [m^2]
         if self.implicit:
             # the operand spans every particle so that any wall's velocity lookup stays in range
             self.operand = ti.Vector.field(self.dim, float, ctx.state.n_total)  # velocity-like [m/s]

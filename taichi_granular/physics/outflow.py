@@ -26,7 +26,7 @@ class Outflow(Stage):
 
     def __init__(self, ctx):
         super().__init__(ctx)
-        domain = ctx.scene.domain
+        domain = ctx.domain
         self.dim = ctx.state.dim
         self.lower = tuple(float(v) for v in domain.lower)
         self.upper = tuple(float(v) for v in domain.upper)

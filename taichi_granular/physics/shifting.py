@@ -54,11 +54,11 @@ class ParticleShifting(PairStage):
 
     def __init__(self, ctx):
         super().__init__(ctx)
-        cfg = ctx.scene.numerics.particle_shifting
+        cfg = ctx.numerics.particle_shifting
         self.dim = ctx.state.dim
         self.coefficient = cfg.coefficient
         self.threshold = cfg.free_surface_threshold
-        self.spacing = ctx.scene.numerics.particle_spacing
+        self.spacing = ctx.numerics.particle_spacing
         self.h = ctx.smoothing.h
 
     @ti.func

@@ -37,15 +37,20 @@ def in_slot_order(classes: list, slots: tuple) -> list:
 
 @dataclass
 class Context:
-    """What stages are built from: the state, the neighbour grid, the smoothing function,
-    the boundary model, the material model and the scene."""
+    """What stages are built from: the state, the neighbour grid, the smoothing function, the
+    boundary model, the material model, and of the scene only the sections stages read (the
+    numerics, gravity, the domain, the plane walls' and obstacles' keys), not the whole Scene."""
 
     state: Any
     grid: Any
     smoothing: Any
     walls: Any
     model: Any
-    scene: Any
+    numerics: Any  # the scene's numerics section (sections.Numerics)
+    gravity: Tuple[float, ...]  # the gravity vector [m/s^2]
+    domain: Any  # sections.Domain
+    plane_walls: Tuple = ()  # the scene's walls (bodies.Wall)
+    obstacles: Tuple = ()  # the scene's obstacles (bodies.*Obstacle)
     gradient: Any = None  # PlainGradient or CorrectedGradient: grad W as pair loops see it
     time_step: Any = None  # 0-d field: the dt of the step being taken [s] (set by Scheme.step)
     time: Any = None  # 0-d field: the time the position stages move the scene to [s] (Scheme.after_move)

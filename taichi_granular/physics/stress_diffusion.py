@@ -35,7 +35,7 @@ class StressDiffusion(Stage):
         self.h = ctx.smoothing.h
         self.eps2 = 0.01 * self.h**2
         self.dim = ctx.state.dim
-        self.coefficient = ctx.scene.numerics.stress_diffusion * self.h * ctx.model.wave_speed  # [m^2/s]
+        self.coefficient = ctx.numerics.stress_diffusion * self.h * ctx.model.wave_speed  # [m^2/s]
         if len(ctx.model.history) != 1:
             raise ValueError("stress diffusion acts on a model with one integrated stress tensor")
         names = ctx.model.history[0]

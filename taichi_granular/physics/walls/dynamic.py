@@ -121,8 +121,8 @@ class WallFriction(PairStage):
         self.dim = ctx.state.dim
         self.time_step = ctx.time_step
         # the same pair forces the momentum stages add, summed here over boundary neighbours only
-        self.momentum = MOMENTUM[ctx.scene.numerics.momentum](ctx)
-        self.has_viscosity = ctx.scene.numerics.artificial_viscosity.enabled
+        self.momentum = MOMENTUM[ctx.numerics.momentum](ctx)
+        self.has_viscosity = ctx.numerics.artificial_viscosity.enabled
         self.viscosity = ArtificialViscosity(ctx) if self.has_viscosity else None
 
     @ti.func

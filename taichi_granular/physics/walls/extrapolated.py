@@ -84,7 +84,7 @@ class WallVelocityExtrapolation(Stage):
     def __init__(self, ctx):
         super().__init__(ctx)
         self.dim = ctx.state.dim
-        self.turning = any(getattr(o, "angular_velocity", 0.0) != 0.0 for o in ctx.scene.obstacles)
+        self.turning = any(getattr(o, "angular_velocity", 0.0) != 0.0 for o in ctx.obstacles)
 
     @ti.func
     def wall_motion(self, k, x):
@@ -132,7 +132,7 @@ class WallStressExtrapolation(Stage):
     def __init__(self, ctx):
         super().__init__(ctx)
         self.dim = ctx.state.dim
-        self.gravity = ti.Vector(ctx.scene.gravity_vector)
+        self.gravity = ti.Vector(ctx.gravity)
         self.reference_density = ctx.model.reference_density()
 
     @ti.func
@@ -222,9 +222,9 @@ class DrumImpermeability(Stage):
 
     def __init__(self, ctx):
         super().__init__(ctx)
-        drums = [o for o in ctx.scene.obstacles if o.shape == "drum"]
+        drums = [o for o in ctx.obstacles if o.shape == "drum"]
         self.centres = [tuple(o.origin or (0.0, 0.0)) for o in drums]
-        self.limits = [o.radius - 0.25 * ctx.scene.numerics.particle_spacing for o in drums]
+        self.limits = [o.radius - 0.25 * ctx.numerics.particle_spacing for o in drums]
         self.corrections = ti.field(ti.i32, shape=())
 
     @ti.kernel

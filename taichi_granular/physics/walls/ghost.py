@@ -176,15 +176,15 @@ class WallImpermeability(Stage):
 
     def __init__(self, ctx):
         super().__init__(ctx)
-        walls = ctx.scene.walls
-        dim = ctx.scene.dimension
+        walls = ctx.plane_walls
+        dim = ctx.state.dim
         self.n_walls = len(walls)
         self.normal = [tuple(w.normal) for w in walls]
         self.point = [tuple(w.point) for w in walls]
-        self.lower = [tuple(w.lower if w.lower is not None else ctx.scene.domain.lower) for w in walls]
-        self.upper = [tuple(w.upper if w.upper is not None else ctx.scene.domain.upper) for w in walls]
+        self.lower = [tuple(w.lower if w.lower is not None else ctx.domain.lower) for w in walls]
+        self.upper = [tuple(w.upper if w.upper is not None else ctx.domain.upper) for w in walls]
         self.dim = dim
-        self.min_distance = 0.25 * ctx.scene.numerics.particle_spacing
+        self.min_distance = 0.25 * ctx.numerics.particle_spacing
         self.corrections = ti.field(ti.i32, shape=())
 
     @ti.kernel

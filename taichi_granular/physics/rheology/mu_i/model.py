@@ -65,7 +65,7 @@ class MuIRheology(Model):
     @classmethod
     def from_scene(cls, scene):
         return cls(scene.material, scene.dimension, scene.numerics.smoothing_length, scene.precision,
-                   implicit_viscosity=scene.implicit_viscosity)
+                   implicit_viscosity=scene.numerics.implicit_viscosity)
 
     # integrated per-particle quantities besides x, v, rho: none (the stress is algebraic)
     derived_fields = (  # derived_output's, in the VTU files only
