@@ -43,6 +43,7 @@ from ...stage import Stage
 @ti.data_oriented
 class ElastoplasticMohrCoulomb(Model):
     name = "elastoplastic"
+    pressure_equation = "[A5]"  # the equation-of-state stage's tag (physics/equation_of_state.py)
     fields = (
         FieldSpec("deviatoric_stress", "matrix", "deviatoric stress s [A6] (in-plane part in 2D)", "Pa", "material"),
         FieldSpec("deviatoric_stress_rate", "matrix", "Jaumann rate ds/dt [A6]", "Pa/s", "material"),
@@ -186,34 +187,18 @@ class ElastoplasticMohrCoulomb(Model):
 
     def stage_classes(self, scene):
         from ...continuity import Continuity
+        from ...equation_of_state import DensityPressure
         from ...momentum import MOMENTUM
         from ...strain_rate import StrainRate
         from ...stress_diffusion import StressDiffusion
         diffusion = [StressDiffusion] if scene.numerics.stress_diffusion > 0.0 else []
         # the strain rate does not need the pressure: before it, so that it shares continuity's pass
-        return [Continuity, StrainRate, LinearPressure, JaumannStressRate] + diffusion + \
+        return [Continuity, StrainRate, DensityPressure, JaumannStressRate] + diffusion + \
             [MOMENTUM["stress_divergence"]]
 
     def update_stage_classes(self):
         """Stages run after each integrator update: the return to the yield surface."""
         return [PlasticCorrection]
-
-
-@ti.data_oriented
-class LinearPressure(Stage):
-    """EOS stage: p = K (rho/rho_0 - 1) [A5] for every particle whose density evolves
-    (material, and dynamic boundary particles)."""
-
-    name = "linear_pressure"
-    slot = "eos"
-    category = "eos"
-    equation = "[A5]"
-
-    @ti.kernel
-    def _run(self):
-        ti.loop_config(serialize=runtime.serial_loops)
-        for i in range(self.state.density_rate.shape[0]):
-            self.state.pressure[i] = self.model.pressure_of(self.state.density[i])
 
 
 @ti.data_oriented

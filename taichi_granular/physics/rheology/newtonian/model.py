@@ -4,9 +4,7 @@ stages every model shares (continuity, velocity gradient, momentum)."""
 import numpy as np
 import taichi as ti
 
-from .... import runtime
 from ....state import FieldSpec
-from ...stage import Stage
 from ...strain_rate import deviator
 from ..base import Model
 
@@ -16,6 +14,7 @@ class NewtonianModel(Model):
     """Units: densities kg/m^3, pressures Pa, viscosity Pa s, speeds m/s."""
 
     name = "newtonian"
+    pressure_equation = "p = c^2 (rho - rho_0)"
     # the constant viscosity, in the field the momentum stage's residual damping reads
     fields = (FieldSpec("viscosity", "scalar", "dynamic viscosity eta", "Pa s", "material"),)
 
@@ -77,23 +76,10 @@ class NewtonianModel(Model):
 
     def stage_classes(self, scene):
         from ...continuity import Continuity
+        from ...equation_of_state import DensityPressure
         from ...momentum import MOMENTUM
         from ...strain_rate import StrainRate
-        return [Continuity, StrainRate, LinearEquationOfState, MOMENTUM[scene.numerics.momentum]]
-
-
-@ti.data_oriented
-class LinearEquationOfState(Stage):
-    name = "linear_equation_of_state"
-    slot = "eos"
-    category = "eos"
-    equation = "p = c^2 (rho - rho_0)"
-
-    @ti.kernel
-    def _run(self):
-        ti.loop_config(serialize=runtime.serial_loops)
-        for i in range(self.state.n_material):
-            self.state.pressure[i] = self.model.pressure_of(self.state.density[i])
+        return [Continuity, StrainRate, DensityPressure, MOMENTUM[scene.numerics.momentum]]
 
 
 MODEL = NewtonianModel
