@@ -70,7 +70,7 @@ def cmd_describe(args) -> int:
     from .scheme import Scheme
 
     scene = load_scene(args.scene, args.set)
-    runtime.init("cpu", scene.precision)  # describing allocates, never runs: any arch will do
+    runtime.init("cpu", scene.precision)  # describing takes no step (one rate evaluation): any arch will do
     scheme = Scheme(scene)
     state = scheme.state
     print(f"scene {scene.name}: {scene.dimension}D, model {scene.material.model}, arch {scene.arch}, "
@@ -87,8 +87,8 @@ def cmd_describe(args) -> int:
         print(f"  {name:<24} {scope:<9} {shape:<7} {nbytes / 1024:10.1f} KiB")
     print(f"  {'neighbour grid':<42} {scheme.grid.memory_bytes() / 1024:10.1f} KiB")
     print(f"total field memory: {scheme.memory_bytes() / 2**20:.2f} MiB")
-    scheme.evaluate_rates()
-    print(f"estimated time step: {scheme.stable_time_step():.3g} s")
+    scheme.evaluate_rates()  # the one launch of the rate stages: the time step needs the rates at t = 0
+    print(f"estimated time step: {scheme.stable_time_step():.3g} s (from the rates at t = 0; no step is taken)")
     for line in describe_lines(scene, scheme.model):
         print(line)
     return 0
