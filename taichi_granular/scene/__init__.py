@@ -28,9 +28,12 @@ class InitialParticles:
     density: np.ndarray
     pressure: np.ndarray
     n_material: int
-    wall_fields: Dict[str, np.ndarray] = field(default_factory=dict)  # (n_wall, ...)
+    # per boundary particle, where it was laid: 'wall_distance' behind its plane [m] and the plane's
+    # 'wall_normal' (zero for obstacles); the boundary model derives its own fields from these and
+    # from its source's keys (physics/walls initial_fields)
+    wall_layout: Dict[str, np.ndarray] = field(default_factory=dict)  # (n_wall, ...)
     block_of: np.ndarray = None  # block index of each material particle
-    wall_of: np.ndarray = None  # wall index of each wall particle
+    wall_of: np.ndarray = None  # source of each wall particle: walls[k], then obstacles[k - len(walls)]
 
     @property
     def n_total(self) -> int:
@@ -164,9 +167,7 @@ def build_initial(scene: Scene, model) -> InitialParticles:
     _check_inside_domain(x_mat, scene, lambda i: f"particles[{block_of[i]}]", "material outside the domain")
     n_mat = len(x_mat)
 
-    wall_pos, wall_depth, wall_normal, wall_beta, wall_extrap, wall_of = [], [], [], [], [], []
-    wall_mu = []  # tan(delta) of each boundary particle's source (-1: no Coulomb friction)
-    wall_omega, wall_centre = [], []  # rigid rotation of each boundary particle's source (drums)
+    wall_pos, wall_depth, wall_normal, wall_of = [], [], [], []
     layers = int(math.ceil(2.0 * scene.numerics.smoothing_length / dp - 1e-9))
     for w, wall in enumerate(scene.walls):
         lower = wall.lower if wall.lower is not None else scene.domain.lower
@@ -187,12 +188,7 @@ def build_initial(scene: Scene, model) -> InitialParticles:
         wall_pos.append(pts)
         wall_depth.append(depth)
         wall_normal.append(np.tile(np.array(wall.normal, float), (len(pts), 1)))
-        wall_beta.append(np.full(len(pts), wall.max_velocity_factor))
-        wall_extrap.append(np.full(len(pts), 1.0 if wall.ghost_stress == "extrapolated" else 0.0))
         wall_of.append(np.full(len(pts), w))
-        wall_mu.append(np.full(len(pts), _friction_coefficient(wall)))
-        wall_omega.append(np.zeros(len(pts)))
-        wall_centre.append(np.zeros((len(pts), dim)))
     for k, obstacle in enumerate(scene.obstacles):
         try:
             pts = obstacle_particles(obstacle, dim, dp, layers)
@@ -203,32 +199,17 @@ def build_initial(scene: Scene, model) -> InitialParticles:
         wall_pos.append(pts)
         wall_depth.append(np.zeros(len(pts)))
         wall_normal.append(np.zeros((len(pts), dim)))
-        wall_beta.append(np.ones(len(pts)))
-        wall_extrap.append(np.zeros(len(pts)))
         wall_of.append(np.full(len(pts), len(scene.walls) + k))
-        wall_mu.append(np.full(len(pts), _friction_coefficient(obstacle)))
-        wall_omega.append(np.full(len(pts), getattr(obstacle, "angular_velocity", 0.0)))
-        wall_centre.append(np.tile(np.asarray(obstacle.origin or (0.0,) * dim, float), (len(pts), 1)))
     if wall_pos:
         x_wall, keep = _unique_points(np.concatenate(wall_pos), dp)
-        wall_fields = {"wall_distance": np.concatenate(wall_depth)[keep],
-                       "wall_normal": np.concatenate(wall_normal)[keep],
-                       "wall_beta_max": np.concatenate(wall_beta)[keep],
-                       "wall_extrapolation": np.concatenate(wall_extrap)[keep],
-                       "wall_friction": np.concatenate(wall_mu)[keep],
-                       "wall_rest_position": x_wall,
-                       "wall_angular_velocity": np.concatenate(wall_omega)[keep],
-                       "wall_rotation_centre": np.concatenate(wall_centre)[keep]}
-        if dim == 2:  # the rigid rotation's velocity, omega z x (x - c)
-            arm = x_wall - wall_fields["wall_rotation_centre"]
-            wall_fields["wall_velocity"] = wall_fields["wall_angular_velocity"][:, None] * np.c_[-arm[:, 1], arm[:, 0]]
+        wall_layout = {"wall_distance": np.concatenate(wall_depth)[keep], "wall_normal": np.concatenate(wall_normal)[keep]}
         wall_of_arr = np.concatenate(wall_of)[keep]
         _check_inside_domain(x_wall, scene, lambda i: _wall_key(scene, wall_of_arr[i]),
                              "wall particles reach outside the domain; enlarge domain")
         _check_clear_of_walls(x_mat, x_wall, wall_of_arr, dp, scene)
     else:
         x_wall = np.zeros((0, dim))
-        wall_fields, wall_of_arr = {}, np.zeros(0, int)
+        wall_layout, wall_of_arr = {}, np.zeros(0, int)
 
     p_mat = np.concatenate(pressures)
     n_wall = len(x_wall)
@@ -243,7 +224,7 @@ def build_initial(scene: Scene, model) -> InitialParticles:
     density = np.concatenate([model.initial_density(p_mat), model.initial_density(p_wall) if n_wall else []])
     mass = np.full(n_mat + n_wall, rho_ref * volume)
     return InitialParticles(position=position, velocity=velocity, mass=mass, density=density,
-                            pressure=pressure, n_material=n_mat, wall_fields=wall_fields,
+                            pressure=pressure, n_material=n_mat, wall_layout=wall_layout,
                             block_of=block_of, wall_of=wall_of_arr)
 
 
@@ -284,12 +265,6 @@ def _overburden(x_wall, x_mat, p_mat, g, rho, reach):
         for o in offsets:
             best[w] = max(best[w], table.get(tuple(c + o), -np.inf))
     return np.maximum(best - rho * g_norm * (x_wall @ up), 0.0)
-
-
-def _friction_coefficient(source) -> float:
-    """tan(delta) of a wall or obstacle; -1 when it has no Coulomb friction angle (a rough wall,
-    physics/walls/dynamic.py)."""
-    return -1.0 if source.friction_angle_deg is None else math.tan(math.radians(source.friction_angle_deg))
 
 
 def _unique_points(points: np.ndarray, spacing: float):

@@ -22,6 +22,9 @@ f_n = -sum_w m_w (p_i/rho_i^2 + p_w/rho_w^2) grad_i W_iw; it stops the tangentia
 particle would have after the step when that takes less than tan(delta) |f_n| (sticking), and
 otherwise opposes it with that limit (sliding). It acts after every other force.
 """
+import math
+
+import numpy as np
 import taichi as ti
 
 from ... import runtime
@@ -47,6 +50,15 @@ class DynamicWalls(NoWalls):
     def __init__(self, state, gravity=None):
         super().__init__(state, gravity)
         self.coulomb = state.has("wall_friction")
+
+    @classmethod
+    def initial_fields(cls, sources, initial) -> dict:
+        """tan(delta) of each boundary particle's source, -1 where it has no Coulomb friction
+        angle (a rough wall)."""
+        fields = super().initial_fields(sources, initial)
+        angles = [sources[w].friction_angle_deg for w in initial.wall_of]
+        fields["wall_friction"] = np.array([-1.0 if a is None else math.tan(math.radians(a)) for a in angles])
+        return fields
 
     @ti.func
     def stress_index(self, i, j):

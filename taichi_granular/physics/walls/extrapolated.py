@@ -28,6 +28,7 @@ The velocity is extrapolated before the material's rates (continuity and velocit
 the no-slip wall), the stress after the material's stress and before the momentum equation.
 Walls that move (the rotating drum) carry their prescribed velocity in ``wall_velocity``.
 """
+import numpy as np
 import taichi as ti
 
 from ... import runtime
@@ -49,6 +50,22 @@ EXTRAPOLATED_FIELDS = (
 class ExtrapolatedWalls(NoWalls):
     name = "extrapolated"
     fields = EXTRAPOLATED_FIELDS
+
+    @classmethod
+    def initial_fields(cls, sources, initial) -> dict:
+        """The rigid rotation of each boundary particle's source (a drum's omega about its origin;
+        0 for fixed walls), its rest position and, in 2D, the wall velocity omega z x (x - c)."""
+        fields = super().initial_fields(sources, initial)
+        x_wall = initial.position[initial.n_material:]
+        dim = x_wall.shape[1]
+        omega = np.array([getattr(sources[w], "angular_velocity", 0.0) for w in initial.wall_of], float)
+        centre = np.array([getattr(sources[w], "origin", None) or (0.0,) * dim for w in initial.wall_of],
+                          float).reshape(-1, dim)
+        fields.update({"wall_rest_position": x_wall, "wall_angular_velocity": omega, "wall_rotation_centre": centre})
+        if dim == 2:
+            arm = x_wall - centre
+            fields["wall_velocity"] = omega[:, None] * np.c_[-arm[:, 1], arm[:, 0]]
+        return fields
 
     @classmethod
     def position_stage_classes(cls, scene):

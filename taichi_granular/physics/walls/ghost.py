@@ -21,6 +21,7 @@ at d_i = dp/2 over ghost rows at d_j = dp/2, 3dp/2, 5dp/2, whose exact linear ex
 needs beta = 2, 4, 6; capped at 1.5 the wall strain rate of the Table 2 layer came out 15 % low
 and its first row felt a net down-slope force of 5 g sin(theta) (measured).
 """
+import numpy as np
 import taichi as ti
 
 from ... import runtime
@@ -51,6 +52,13 @@ class NoWalls:
         self.state = state
         self.gravity = tuple(gravity) if gravity is not None else (0.0,) * state.dim
 
+    @classmethod
+    def initial_fields(cls, sources, initial) -> dict:
+        """The boundary particles' fields at t = 0 (name -> (n_wall, ...) array), from where they
+        were laid (``initial.wall_layout``) and from the keys of their source (``sources``: the
+        scene's walls, then its obstacles; ``initial.wall_of`` indexes them). Every boundary model
+        has the plane geometry (the impermeability safeguard reads it); subclasses add theirs."""
+        return dict(initial.wall_layout)
 
     @ti.func
     def state_index(self, i, j):
@@ -88,6 +96,15 @@ class NoWalls:
 @ti.data_oriented
 class GhostWalls(NoWalls):
     name = "ghost"
+
+    @classmethod
+    def initial_fields(cls, sources, initial) -> dict:
+        """beta_max [M36] and the ghost stress rule of each ghost's wall."""
+        fields = super().initial_fields(sources, initial)
+        fields["wall_beta_max"] = np.array([sources[w].max_velocity_factor for w in initial.wall_of], float)
+        fields["wall_extrapolation"] = np.array([float(sources[w].ghost_stress == "extrapolated")
+                                                 for w in initial.wall_of])
+        return fields
 
     @classmethod
     def position_stage_classes(cls, scene):
