@@ -92,6 +92,7 @@ class Wall:
     normal: Tuple[float, ...] = scene_key("unit normal of the plane, pointing into the material", bounds="[-1, 1]")
     point: Tuple[float, ...] = scene_key("a point on the plane", unit="m", bounds="[-1e5, 1e5]")
     name: str = scene_key("label used in messages", "wall")
+    angular_velocity = 0.0  # a plane wall does not turn (not a key; drums do)
     type: Literal["ghost", "dynamic", "extrapolated"] = scene_key(
         "boundary model: ghost (mu(I), [M34]-[M36]), dynamic (boundary particles that obey continuity and "
         "the equation of state, Dalrymple & Knio 2001, as in [A]) or extrapolated (boundary particles whose "
@@ -149,6 +150,7 @@ class _Obstacle:
         "(|wall shear force| <= tan(delta) |wall normal force|); default none: the wall resists shear "
         "only through the stress it carries (physics/walls/dynamic.py)", None, "deg", bounds="[0, 90)", hint="degrees, not radians")
     dimensions = (3,)
+    angular_velocity = 0.0  # a fixed solid (not a key; the drum's is)
 
     def check(self, path: str, dim: int) -> None:
         if dim not in self.dimensions:

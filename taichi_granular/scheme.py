@@ -18,6 +18,7 @@ from .physics.artificial_stress import ArtificialStress
 from .physics.artificial_viscosity import ArtificialViscosity
 from .physics.gradient_correction import GRADIENTS
 from .physics.implicit_viscosity import ImplicitViscosity
+from .physics.momentum import MOMENTUM
 from .physics.outflow import Outflow
 from .physics.rheology import model_class
 from .physics.shifting import FreeSurface, ParticleShifting
@@ -148,7 +149,7 @@ class Scheme:
         self.integrator = integrator_cls(ctx)
         self.viscous_solve = None  # physics/implicit_viscosity.py, between the kick and the drift
         if scene.numerics.implicit_viscosity:
-            momentum = next(stage for stage in self.rate_stages if hasattr(stage, "apply_viscous"))
+            momentum = next(stage for stage in self.rate_stages if isinstance(stage, tuple(MOMENTUM.values())))
             # a Picard iteration re-evaluates the viscosity: the stages from the strain rate to it
             names = [stage.name for stage in self.rate_stages]
             refresh = self.rate_stages[names.index("strain_rate"):names.index("regularised_viscosity") + 1]

@@ -58,9 +58,9 @@ class ExtrapolatedWalls(NoWalls):
         fields = super().initial_fields(sources, initial)
         x_wall = initial.position[initial.n_material:]
         dim = x_wall.shape[1]
-        omega = np.array([getattr(sources[w], "angular_velocity", 0.0) for w in initial.wall_of], float)
-        centre = np.array([getattr(sources[w], "origin", None) or (0.0,) * dim for w in initial.wall_of],
-                          float).reshape(-1, dim)
+        omega = np.array([sources[w].angular_velocity for w in initial.wall_of], float)
+        centre = np.array([sources[w].origin or (0.0,) * dim if sources[w].angular_velocity else (0.0,) * dim
+                           for w in initial.wall_of], float).reshape(-1, dim)
         fields.update({"wall_rest_position": x_wall, "wall_angular_velocity": omega, "wall_rotation_centre": centre})
         if dim == 2:
             arm = x_wall - centre
@@ -74,7 +74,7 @@ class ExtrapolatedWalls(NoWalls):
         stress, so nothing else stops it at a wall; measured: the corner grain of the pile
         collapse fell through the floor at 0.06 s)."""
         from .ghost import WallImpermeability
-        turning = any(getattr(o, "angular_velocity", 0.0) != 0.0 for o in scene.obstacles)
+        turning = any(o.angular_velocity != 0.0 for o in scene.obstacles)
         drums = any(o.shape == "drum" for o in scene.obstacles)
         return ([WallRotation] if turning else []) + ([DrumImpermeability] if drums else []) + \
             ([WallImpermeability] if scene.walls else [])
@@ -101,7 +101,7 @@ class WallVelocityExtrapolation(Stage):
     def __init__(self, ctx):
         super().__init__(ctx)
         self.dim = ctx.state.dim
-        self.turning = any(getattr(o, "angular_velocity", 0.0) != 0.0 for o in ctx.obstacles)
+        self.turning = any(o.angular_velocity != 0.0 for o in ctx.obstacles)
 
     @ti.func
     def wall_motion(self, k, x):
