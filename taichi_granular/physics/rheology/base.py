@@ -52,6 +52,14 @@ class Model:
     history: Tuple = ()
     needs_free_surface = False
 
+    def __init__(self, material, dim: int, smoothing_length: float, state=None):
+        """``material``: the parameter class instance; ``smoothing_length`` h [m]; ``state``: the
+        ParticleState, set by the scheme once it is allocated."""
+        self.material = material
+        self.dim = dim
+        self.state = state
+        self.h = float(smoothing_length)
+
     def initial_fields(self, initial) -> dict:
         """Model fields to load at t = 0 beyond the common ones (name -> array)."""
         return {}

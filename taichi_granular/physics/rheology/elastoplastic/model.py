@@ -60,10 +60,7 @@ class ElastoplasticMohrCoulomb(Model):
 
     def __init__(self, material, dim: int, smoothing_length: float, precision: str = "f64", state=None,
                  bulk_modulus: float = None):
-        self.material = material
-        self.dim = dim
-        self.state = state
-        self.h = float(smoothing_length)
+        super().__init__(material, dim, smoothing_length, state)
         self.rho_0 = material.density
         self.G = material.shear_modulus
         self.K = float(bulk_modulus if bulk_modulus is not None else material.bulk_modulus)

@@ -65,10 +65,7 @@ class HypoplasticBagnold(Model):
     max_substeps = 256
 
     def __init__(self, material, dim: int, smoothing_length: float, state=None, numerics=None):
-        self.material = material
-        self.dim = dim
-        self.state = state
-        self.h = float(smoothing_length)
+        super().__init__(material, dim, smoothing_length, state)
         self.c1, self.c2, self.c3, self.c4 = (float(c) for c in material.constants)
         self.stiffness = sum(abs(float(c)) for c in material.constants)  # bounds the rate per unit ||D|| |T_s|
         self.e_min = float(material.min_void_ratio)

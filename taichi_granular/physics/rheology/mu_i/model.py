@@ -42,11 +42,8 @@ class MuIRheology(Model):
 
     def __init__(self, material, dim: int, smoothing_length: float, precision: str = "f64", state=None,
                  implicit_viscosity: bool = False):
-        self.material = material
+        super().__init__(material, dim, smoothing_length, state)
         self.implicit_viscosity = implicit_viscosity  # the time step drops [M39]'s viscous limit
-        self.dim = dim
-        self.state = state
-        self.h = float(smoothing_length)
         self.rho_s0 = material.grain_density
         self.d0 = material.grain_diameter
         self.mu_s = material.mu_s

@@ -19,10 +19,7 @@ class NewtonianModel(Model):
     fields = (FieldSpec("viscosity", "scalar", "dynamic viscosity eta", "Pa s", "material"),)
 
     def __init__(self, material, dim: int, smoothing_length: float, state=None):
-        self.material = material
-        self.dim = dim
-        self.state = state
-        self.h = float(smoothing_length)
+        super().__init__(material, dim, smoothing_length, state)
         self.rho_0 = material.density
         self.eta = material.viscosity
         self.c = material.sound_speed
