@@ -142,16 +142,11 @@ class Scene:
 
 # The papers' symbols, so that a scene written from the equations gets pointed to the key.
 SYMBOLS = {
-    "mu_s": "static_friction_deg (the angle arctan(mu_s))",
-    "mu_2": "limit_friction_deg (the angle arctan(mu_2))",
-    "I_0": "reference_inertial_number", "i_0": "reference_inertial_number",
-    "phi_max": "solid_fraction_max", "phi_min": "solid_fraction_min",
-    "K_t": "grain_compressibility", "k_t": "grain_compressibility",
-    "tau_0": "max_yield_stress", "m_0": "regularisation_time",
-    "rho_s0": "grain_density", "rho_s": "grain_density", "d0": "grain_diameter", "d": "grain_diameter",
     "dp": "particle_spacing", "h": "smoothing_length_ratio (h/dp)", "h_over_dp": "smoothing_length_ratio",
     "g": "gravity.magnitude", "theta": "gravity.tilt_deg", "slope_deg": "tilt_deg",
 }
+for _material in MATERIALS.values():  # each model's own symbols (its parameter class's ``symbols``)
+    SYMBOLS.update(_material.symbols)
 
 
 def _suggest(key: str, allowed) -> str:

@@ -17,7 +17,7 @@ and offers, inside kernels, ``stable_time_step(i)`` [s] and ``density_error(i)``
 defaults below are what a model without that feature declares.
 """
 from dataclasses import dataclass
-from typing import ClassVar, FrozenSet, Tuple
+from typing import ClassVar, Dict, FrozenSet, Tuple
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -27,6 +27,7 @@ class MaterialParameters:
     obstacle_shapes: ClassVar[Tuple[str, ...]] = ()  # obstacle shapes a scene of this model may hold
     obstacle_walls: ClassVar[str] = "dynamic"  # the boundary model obstacles are laid as
     numerics_read: ClassVar[FrozenSet[str]] = frozenset()  # model-specific numerics keys (config.MODEL_NUMERICS)
+    symbols: ClassVar[Dict[str, str]] = {}  # the paper's symbol -> the key (an unknown key's suggestion)
 
     def check(self, path: str) -> None:
         """Relations between keys (each key's own range is checked by keys.check_numbers)."""

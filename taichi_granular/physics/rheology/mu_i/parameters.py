@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import ClassVar, FrozenSet, Literal, Tuple
+from typing import ClassVar, Dict, FrozenSet, Literal, Tuple
 
 from ....keys import ConfigError, scene_key
 from ..base import MaterialParameters
@@ -21,6 +21,14 @@ class MuIMaterial(MaterialParameters):
     obstacle_shapes: ClassVar[Tuple[str, ...]] = ("chute", "box", "post_rows", "cylinder", "wedge", "mesh")
     obstacle_walls: ClassVar[str] = "dynamic"  # the boundary model obstacles are laid as
     numerics_read: ClassVar[FrozenSet[str]] = frozenset({"implicit_viscosity"})
+    symbols: ClassVar[Dict[str, str]] = {
+        "mu_s": "static_friction_deg (the angle arctan(mu_s))", "mu_2": "limit_friction_deg (the angle arctan(mu_2))",
+        "I_0": "reference_inertial_number", "i_0": "reference_inertial_number",
+        "phi_max": "solid_fraction_max", "phi_min": "solid_fraction_min",
+        "K_t": "grain_compressibility", "k_t": "grain_compressibility",
+        "tau_0": "max_yield_stress", "m_0": "regularisation_time",
+        "rho_s0": "grain_density", "rho_s": "grain_density", "d0": "grain_diameter", "d": "grain_diameter",
+    }
 
     model: Literal["mu_i"] = scene_key("constitutive model")
     grain_density: float = scene_key("rho_s0, density of the grain material at zero pressure", unit="kg/m^3",
