@@ -135,10 +135,10 @@ class Wall:
 
 @dataclass(frozen=True, kw_only=True)
 class _Obstacle:
-    """A fixed solid laid as dynamic boundary particles (scene/geometry.py), placed by a rigid
-    frame: ``origin`` and a tilt about the y axis (3D; z in 2D) so that the local x axis runs
-    down a slope of ``tilt_deg`` (x' = (cos, 0, -sin), z' = (sin, 0, cos)). Local coordinates
-    below are in that frame."""
+    """A fixed solid laid as boundary particles (scene/geometry.py; of the model's
+    ``obstacle_walls`` type), placed by a rigid frame: ``origin`` and a tilt about the y axis
+    (3D; z in 2D) so that the local x axis runs down a slope of ``tilt_deg``
+    (x' = (cos, 0, -sin), z' = (sin, 0, cos)). Local coordinates below are in that frame."""
 
     name: str = scene_key("label used in messages", "obstacle")
     origin: Optional[Tuple[float, ...]] = scene_key("the local frame's origin (default the global origin)", None, "m",

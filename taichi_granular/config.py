@@ -63,7 +63,8 @@ class Scene:
     gravity: Gravity = scene_key("gravitational acceleration", Gravity())
     walls: Tuple[Wall, ...] = scene_key("walls as boundary particles", ())
     obstacles: Tuple[AnyObstacle, ...] = scene_key(
-        "solids laid as dynamic boundary particles: chute, box, post_rows, cylinder, wedge, mesh", ())
+        "solids laid as boundary particles of the model's obstacle type (dynamic; hypoplastic: extrapolated): chute, "
+        "box, post_rows, cylinder, wedge, mesh, drum", ())
     render: Render = scene_key("PNG frames", Render())
 
     def check(self) -> None:
@@ -91,6 +92,10 @@ class Scene:
                 supported = ", ".join(material.obstacle_shapes) or "none"
                 raise ConfigError(f"obstacles[{k}].shape", f"material.model: {self.material.model} supports the "
                                                            f"obstacles: {supported}")
+            if obstacle.friction_angle_deg is not None and material.obstacle_walls != "dynamic":
+                raise ConfigError(f"obstacles[{k}].friction_angle_deg", f"obstacles of material.model: "
+                                  f"{self.material.model} are {material.obstacle_walls} wall particles, which take "
+                                  "no Coulomb friction angle (only dynamic boundary particles do)")
             if any(w.type != material.obstacle_walls for w in self.walls):
                 raise ConfigError(f"obstacles[{k}]", f"obstacles of material.model: {self.material.model} are "
                                                      f"{material.obstacle_walls} boundary particles; every wall of "

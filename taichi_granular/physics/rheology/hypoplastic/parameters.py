@@ -34,7 +34,7 @@ class HypoplasticMaterial(MaterialParameters):
     wall_types: ClassVar[Tuple[str, ...]] = ("extrapolated",)
     walls_note: ClassVar[str] = ("the hypoplastic model of [P] uses extrapolated walls, and extrapolated walls "
                                  "need its stress (MODEL.md section 2)")
-    obstacle_shapes: ClassVar[Tuple[str, ...]] = ("drum",)
+    obstacle_shapes: ClassVar[Tuple[str, ...]] = ("drum", "chute", "box", "post_rows", "cylinder", "wedge", "mesh")
     obstacle_walls: ClassVar[str] = "extrapolated"  # [P]'s wall particles, extrapolated from the material
     numerics_read: ClassVar[FrozenSet[str]] = frozenset({"artificial_stress", "stress_diffusion", "stress_increment",
                                                          "bulk_viscosity"})
