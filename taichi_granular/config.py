@@ -28,6 +28,10 @@ from .sections import (BYTES_PER_CELL, BYTES_PER_PARTICLE, Domain, Gravity, Nume
 
 MATERIALS = {name: parameter_class(name) for name in MODELS}  # material.model -> its parameter class
 
+# the boundary types that may meet in one scene (physics/walls BOUNDARIES has a model for each)
+WALL_COMBINATIONS = (frozenset({"ghost"}), frozenset({"dynamic"}), frozenset({"extrapolated"}),
+                     frozenset({"ghost", "dynamic"}))
+
 
 class AnyMaterial:
     """Annotation marker: the ``model`` key picks the class from :data:`MATERIALS`."""
@@ -96,10 +100,10 @@ class Scene:
                 raise ConfigError(f"obstacles[{k}].friction_angle_deg", f"obstacles of material.model: "
                                   f"{self.material.model} are {material.obstacle_walls} wall particles, which take "
                                   "no Coulomb friction angle (only dynamic boundary particles do)")
-            if any(w.type != material.obstacle_walls for w in self.walls):
-                raise ConfigError(f"obstacles[{k}]", f"obstacles of material.model: {self.material.model} are "
-                                                     f"{material.obstacle_walls} boundary particles; every wall of "
-                                                     f"the scene must then be of type {material.obstacle_walls}")
+        if self.wall_types and self.wall_types not in WALL_COMBINATIONS:
+            obstacles = f"; obstacles are {material.obstacle_walls} boundary particles" if self.obstacles else ""
+            raise ConfigError("walls", f"the boundary types {', '.join(sorted(self.wall_types))} do not combine in "
+                                       f"one scene{obstacles}")
         for name, (asked, key, why) in MODEL_NUMERICS.items():  # a model-specific key set for a model without it
             if asked(self.numerics) and name not in material.numerics_read:
                 raise ConfigError(key, f"{why}; material.model: {self.material.model} does not have it")
@@ -134,6 +138,12 @@ class Scene:
                 raise ConfigError(f"particles[{k}]", f"{total:.3g} material particles at dp = {dp:g} m (this block "
                                                      f"{count:.3g}), more than this machine's memory holds "
                                                      f"({max_particles():.3g}); coarsen numerics.particle_spacing")
+
+    @property
+    def wall_types(self) -> frozenset:
+        """The boundary types of the scene: its walls', and its obstacles' (the model's)."""
+        obstacles = {type(self.material).obstacle_walls} if self.obstacles else set()
+        return frozenset({w.type for w in self.walls} | obstacles)
 
     @property
     def gravity_vector(self) -> Tuple[float, ...]:

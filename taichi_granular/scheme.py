@@ -32,13 +32,13 @@ from .config import ConfigError, Scene
 
 
 def boundary_class(scene: Scene):
-    obstacle_type = type(scene.material).obstacle_walls
-    types = sorted({w.type for w in scene.walls} | ({obstacle_type} if scene.obstacles else set()))
+    """The boundary model of the scene's walls and obstacles (physics/walls BOUNDARIES)."""
+    types = frozenset(scene.wall_types)
     if not types:
         return NoWalls
-    if len(types) > 1:
-        raise ConfigError("walls", f"one boundary model per scene, got {types}")
-    return BOUNDARIES[types[0]]
+    if types not in BOUNDARIES:
+        raise ConfigError("walls", f"these boundary types do not combine in one scene: {sorted(types)}")
+    return BOUNDARIES[types]
 
 
 def rate_stage_classes(scene: Scene, model) -> List[type]:

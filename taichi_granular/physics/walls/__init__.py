@@ -13,7 +13,10 @@
 from .dynamic import DynamicWalls
 from .extrapolated import ExtrapolatedWalls
 from .ghost import GhostWalls, NoWalls
+from .mixed import GhostAndDynamicWalls
 
-BOUNDARIES = {"ghost": GhostWalls, "dynamic": DynamicWalls, "extrapolated": ExtrapolatedWalls}
+# the boundary model of a scene, by the set of its walls' and obstacles' types
+BOUNDARIES = {frozenset({"ghost"}): GhostWalls, frozenset({"dynamic"}): DynamicWalls,
+              frozenset({"extrapolated"}): ExtrapolatedWalls, frozenset({"ghost", "dynamic"}): GhostAndDynamicWalls}
 
-__all__ = ["BOUNDARIES", "DynamicWalls", "ExtrapolatedWalls", "GhostWalls", "NoWalls"]
+__all__ = ["BOUNDARIES", "DynamicWalls", "ExtrapolatedWalls", "GhostAndDynamicWalls", "GhostWalls", "NoWalls"]
