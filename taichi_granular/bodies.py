@@ -14,6 +14,28 @@ from .sections import Domain
 
 
 @dataclass(frozen=True, kw_only=True)
+class _Friction:
+    """How a dynamic boundary resists the material sliding along it (physics/walls/dynamic.py)."""
+
+    friction: Optional[Literal["coulomb", "rough"]] = scene_key(
+        "dynamic boundaries: coulomb (the default: the wall's shear force is at most tan(delta) times its normal "
+        "force, delta = friction_angle_deg) or rough (the wall carries the facing grain's deviatoric stress, so its "
+        "friction is the material's own strength: none for grains at zero pressure, which then slide freely)", None)
+    friction_angle_deg: Optional[float] = scene_key(
+        "dynamic boundaries, coulomb: the friction angle delta between the material and this boundary; default the "
+        "material's friction angle (elastoplastic phi, mu(I) arctan(mu_s))", None, "deg", bounds="[0, 90)",
+        hint="degrees, not radians")
+
+    def check_friction(self, path: str, dynamic: bool) -> None:
+        for key in ("friction", "friction_angle_deg"):
+            if getattr(self, key) is not None and not dynamic:
+                raise ConfigError(f"{path}.{key}", "only dynamic boundary particles take a friction rule (ghost and "
+                                                   "extrapolated walls are no-slip)")
+        if self.friction == "rough" and self.friction_angle_deg is not None:
+            raise ConfigError(f"{path}.friction_angle_deg", "a rough wall takes no Coulomb friction angle")
+
+
+@dataclass(frozen=True, kw_only=True)
 class ParticleBlock:
     """A box filled with material particles on a lattice of spacing dp."""
 
@@ -76,7 +98,7 @@ class ParticleBlock:
 
 
 @dataclass(frozen=True, kw_only=True)
-class Wall:
+class Wall(_Friction):
     """A plane wall represented by particles behind it (``type`` selects the boundary model).
 
     ``ghost`` (mu(I), MODEL.md section 1): fixed ghost particles of [M34]-[M36], laid on the
@@ -107,10 +129,6 @@ class Wall:
     ghost_stress: Literal["extrapolated", "mirror"] = scene_key(
         "mirror: sigma_j = sigma_i as in [M]; extrapolated: the traction on planes parallel to the "
         "wall grows by rho_i g (d_i + d_j) (the static momentum balance across the wall)", "extrapolated")
-    friction_angle_deg: Optional[float] = scene_key(
-        "dynamic boundaries: Coulomb friction angle delta between the material and this boundary "
-        "(|wall shear force| <= tan(delta) |wall normal force|); default none: the wall resists shear "
-        "only through the stress it carries (physics/walls/dynamic.py)", None, "deg", bounds="[0, 90)", hint="degrees, not radians")
     initial_pressure: Literal["zero", "overburden"] = scene_key(
         "dynamic boundaries: pressure (and so density, [A5]) of the boundary particles at t = 0: zero "
         "(the reference density, as [A]), or the weight of the material over them (a layer that starts "
@@ -128,13 +146,11 @@ class Wall:
         if self.initial_pressure != "zero" and self.type != "dynamic":
             raise ConfigError(f"{path}.initial_pressure", "only dynamic boundary particles take their pressure "
                                                           "from their density")
-        if self.friction_angle_deg is not None and self.type != "dynamic":
-            raise ConfigError(f"{path}.friction_angle_deg", "only dynamic walls take a friction angle "
-                                                            "(ghost walls are no-slip)")
+        self.check_friction(path, self.type == "dynamic")
 
 
 @dataclass(frozen=True, kw_only=True)
-class _Obstacle:
+class _Obstacle(_Friction):
     """A fixed solid laid as boundary particles (scene/geometry.py; of the model's
     ``obstacle_walls`` type), placed by a rigid frame: ``origin`` and a tilt about the y axis
     (3D; z in 2D) so that the local x axis runs down a slope of ``tilt_deg``
@@ -145,10 +161,6 @@ class _Obstacle:
                      bounds="[-1e5, 1e5]")
     tilt_deg: float = scene_key("slope of the local x axis below the horizontal (about y; +: x' descends)", 0.0,
                                 "deg", bounds="(-90, 90)", hint="degrees, not radians")
-    friction_angle_deg: Optional[float] = scene_key(
-        "dynamic boundaries: Coulomb friction angle delta between the material and this boundary "
-        "(|wall shear force| <= tan(delta) |wall normal force|); default none: the wall resists shear "
-        "only through the stress it carries (physics/walls/dynamic.py)", None, "deg", bounds="[0, 90)", hint="degrees, not radians")
     dimensions = (3,)
     angular_velocity = 0.0  # a fixed solid (not a key; the drum's is)
 
@@ -287,9 +299,6 @@ class DrumObstacle(_Obstacle):
         super().check(path, dim)
         if self.tilt_deg != 0.0:
             raise ConfigError(f"{path}.tilt_deg", "a drum is round: no tilt")
-        if self.friction_angle_deg is not None:
-            raise ConfigError(f"{path}.friction_angle_deg", "drum walls are extrapolated no-slip walls [P]: no "
-                                                            "Coulomb friction angle")
 
 
 OBSTACLES = {cls.__dataclass_fields__["shape"].default: cls

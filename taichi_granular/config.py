@@ -16,7 +16,7 @@ import math
 import typing
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Literal, Tuple, Union
+from typing import Any, Literal, Optional, Tuple, Union
 
 import yaml
 
@@ -96,10 +96,13 @@ class Scene:
                 supported = ", ".join(material.obstacle_shapes) or "none"
                 raise ConfigError(f"obstacles[{k}].shape", f"material.model: {self.material.model} supports the "
                                                            f"obstacles: {supported}")
-            if obstacle.friction_angle_deg is not None and material.obstacle_walls != "dynamic":
-                raise ConfigError(f"obstacles[{k}].friction_angle_deg", f"obstacles of material.model: "
-                                  f"{self.material.model} are {material.obstacle_walls} wall particles, which take "
-                                  "no Coulomb friction angle (only dynamic boundary particles do)")
+            obstacle.check_friction(f"obstacles[{k}]", material.obstacle_walls == "dynamic")
+        sources = [(f"walls[{k}]", w) for k, w in enumerate(self.walls)] + \
+            [(f"obstacles[{k}]", o) for k, o in enumerate(self.obstacles)]
+        for path, source in sources:
+            if self.is_dynamic(source) and source.friction != "rough" and self.boundary_friction_deg(source) is None:
+                raise ConfigError(f"{path}.friction_angle_deg", f"material.model: {self.material.model} has no "
+                                                                "friction angle to default to: give one, or friction: rough")
         if self.wall_types and self.wall_types not in WALL_COMBINATIONS:
             obstacles = f"; obstacles are {material.obstacle_walls} boundary particles" if self.obstacles else ""
             raise ConfigError("walls", f"the boundary types {', '.join(sorted(self.wall_types))} do not combine in "
@@ -138,6 +141,18 @@ class Scene:
                 raise ConfigError(f"particles[{k}]", f"{total:.3g} material particles at dp = {dp:g} m (this block "
                                                      f"{count:.3g}), more than this machine's memory holds "
                                                      f"({max_particles():.3g}); coarsen numerics.particle_spacing")
+
+    def is_dynamic(self, source) -> bool:
+        """Whether a wall or obstacle is laid as dynamic boundary particles."""
+        return source.type == "dynamic" if isinstance(source, Wall) else type(self.material).obstacle_walls == "dynamic"
+
+    def boundary_friction_deg(self, source) -> Optional[float]:
+        """delta of a wall's or obstacle's Coulomb friction with the material [deg]: its own
+        friction_angle_deg, else the material's friction angle; None where it has no Coulomb
+        friction (rough, or not dynamic boundary particles)."""
+        if not self.is_dynamic(source) or source.friction == "rough":
+            return None
+        return source.friction_angle_deg if source.friction_angle_deg is not None else self.material.wall_friction_deg
 
     @property
     def wall_types(self) -> frozenset:

@@ -119,8 +119,7 @@ class Scheme:
         ini = self.initial
         runtime.choose_loops(ini.n_total)
         self.state = ParticleState(scene.dimension, ini.n_material, ini.n_wall, specs)
-        wall_fields = {k: v for k, v in walls_cls.initial_fields(list(scene.walls) + list(scene.obstacles), ini).items()
-                       if self.state.has(k)}
+        wall_fields = {k: v for k, v in walls_cls.initial_fields(scene, ini).items() if self.state.has(k)}
         model_fields = model.initial_fields(ini)
         self.state.load({"position": ini.position, "velocity": ini.velocity, "mass": ini.mass,
                          "density": ini.density, "pressure": ini.pressure, **wall_fields, **model_fields,

@@ -134,3 +134,23 @@ def test_obstacles_a_model_does_not_support_are_named():
     assert set(WALL_COMBINATIONS) == set(BOUNDARIES)
     drum = yaml.safe_load(config_path("hypoplastic/drum_omega1.yaml").read_text())
     assert scene_from_dict(drum).obstacles[0].shape == "drum"
+
+
+def test_dynamic_boundaries_default_to_coulomb_friction_at_the_material_angle():
+    """Issue 26: a dynamic floor left at its default is Coulomb with delta = phi (zero-pressure
+    sheets no longer slide without bound on a rough floor); `friction: rough` keeps the old rule,
+    and a friction rule on a ghost wall is refused."""
+    import math
+
+    from taichi_granular.scheme import Scheme
+
+    base = "elastoplastic/collapse3d_a0_90_coarse.yaml"
+    default = Scheme(load_scene(config_path(base), ["walls.0.friction_angle_deg=null"]))
+    assert default.state.wall_friction.to_numpy() == pytest.approx(math.tan(math.radians(30.0)))
+    assert "wall_friction" in [s.name for s in default.rate_stages]
+    rough = Scheme(load_scene(config_path(base), ["walls.0.friction_angle_deg=null", "walls.0.friction=rough"]))
+    assert "wall_friction" not in [s.name for s in rough.rate_stages]
+    with pytest.raises(ConfigError, match="walls\\[0\\].friction: only dynamic"):
+        load_scene(config_path("mu_i/inclined_plane.yaml"), ["walls.0.friction=coulomb"])
+    with pytest.raises(ConfigError, match="a rough wall takes no Coulomb friction angle"):
+        load_scene(config_path(base), ["walls.0.friction=rough"])

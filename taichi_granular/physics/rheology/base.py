@@ -36,6 +36,12 @@ class MaterialParameters:
         """What the model needs from the rest of a scene beyond the declarations above (numerics
         it cannot run with): a ConfigError naming the key."""
 
+    @property
+    def wall_friction_deg(self):
+        """The Coulomb friction angle a dynamic boundary takes unless its scene gives one [deg]: the
+        material's own friction angle; None for a model without one."""
+        return None
+
     def speed_scale(self, scene):
         """The flow speed the model predicts for this scene (m/s, and where it comes from), or
         None (mach.py then takes free fall and the scene's own speeds)."""

@@ -14,9 +14,10 @@ wall never pulls). Its deviatoric stress is that of the material particle it fac
 strength. Without it the stress form [A12] delivers only about half the wall traction, and the
 first row reaches yield and slides.
 
-Coulomb wall friction (optional, per wall or obstacle: ``friction_angle_deg`` = delta), not in
-[A]: a sheet at the tension cut-off (p_i = 0) has no strength of its own, so the rough rule gives
-it no friction although its weight presses on the wall. ``WallFriction`` adds a Coulomb contact:
+Coulomb wall friction (the default, per wall or obstacle: ``friction_angle_deg`` = delta, else the
+material's friction angle; ``friction: rough`` for the rule above alone), not in [A]: a sheet at
+the tension cut-off (p_i = 0) has no strength of its own, so the rough rule gives it no friction
+although its weight presses on the wall. ``WallFriction`` adds a Coulomb contact:
 its normal force is the boundary particles' pressure force on the particle,
 f_n = -sum_w m_w (p_i/rho_i^2 + p_w/rho_w^2) grad_i W_iw; it stops the tangential velocity the
 particle would have after the step when that takes less than tan(delta) |f_n| (sticking), and
@@ -31,7 +32,7 @@ from ... import runtime
 
 from ...state import FieldSpec
 from ..stage import PairStage, Stage
-from .ghost import NoWalls
+from .ghost import NoWalls, boundary_sources
 
 
 @ti.data_oriented
@@ -52,12 +53,13 @@ class DynamicWalls(NoWalls):
         self.coulomb = state.has("wall_friction")
 
     @classmethod
-    def initial_fields(cls, sources, initial) -> dict:
-        """tan(delta) of each boundary particle's source, -1 where it has no Coulomb friction
-        angle (a rough wall)."""
-        fields = super().initial_fields(sources, initial)
-        angles = [sources[w].friction_angle_deg for w in initial.wall_of]
-        fields["wall_friction"] = np.array([-1.0 if a is None else math.tan(math.radians(a)) for a in angles])
+    def initial_fields(cls, scene, initial) -> dict:
+        """tan(delta) of each boundary particle's source, -1 where it has no Coulomb friction (a
+        rough wall; a ghost beside dynamic particles)."""
+        fields = super().initial_fields(scene, initial)
+        angles = [scene.boundary_friction_deg(source) for source in boundary_sources(scene)]
+        coefficient = np.array([-1.0 if a is None else math.tan(math.radians(a)) for a in angles], float)
+        fields["wall_friction"] = coefficient[initial.wall_of]
         return fields
 
     @ti.func
@@ -78,8 +80,8 @@ class DynamicWalls(NoWalls):
     def stage_classes(cls, scene):
         """The boundary particles' density rate; Coulomb wall friction only if some wall or
         obstacle has a friction angle."""
-        sources = list(scene.walls) + list(scene.obstacles)
-        return [WallContinuity] + ([WallFriction] if any(s.friction_angle_deg is not None for s in sources) else [])
+        coulomb = any(scene.boundary_friction_deg(source) is not None for source in boundary_sources(scene))
+        return [WallContinuity] + ([WallFriction] if coulomb else [])
 
 
 @ti.data_oriented

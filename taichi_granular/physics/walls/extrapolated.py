@@ -35,7 +35,7 @@ from ... import runtime
 
 from ...state import FieldSpec
 from ..stage import Stage
-from .ghost import NoWalls
+from .ghost import NoWalls, boundary_sources
 
 EXTRAPOLATED_FIELDS = (
     FieldSpec("wall_velocity", "vector", "v_wall, the prescribed velocity of the wall at the particle", "m/s",
@@ -52,10 +52,11 @@ class ExtrapolatedWalls(NoWalls):
     fields = EXTRAPOLATED_FIELDS
 
     @classmethod
-    def initial_fields(cls, sources, initial) -> dict:
+    def initial_fields(cls, scene, initial) -> dict:
         """The rigid rotation of each boundary particle's source (a drum's omega about its origin;
         0 for fixed walls), its rest position and, in 2D, the wall velocity omega z x (x - c)."""
-        fields = super().initial_fields(sources, initial)
+        fields = super().initial_fields(scene, initial)
+        sources = boundary_sources(scene)
         x_wall = initial.position[initial.n_material:]
         dim = x_wall.shape[1]
         omega = np.array([sources[w].angular_velocity for w in initial.wall_of], float)

@@ -30,6 +30,11 @@ from ...state import FieldSpec
 from ..stage import Stage
 
 
+def boundary_sources(scene) -> list:
+    """The scene's walls, then its obstacles: what ``InitialParticles.wall_of`` indexes."""
+    return list(scene.walls) + list(scene.obstacles)
+
+
 @ti.data_oriented
 class NoWalls:
     """The boundary interface for scenes without walls: every neighbour is material."""
@@ -53,10 +58,10 @@ class NoWalls:
         self.gravity = tuple(gravity) if gravity is not None else (0.0,) * state.dim
 
     @classmethod
-    def initial_fields(cls, sources, initial) -> dict:
+    def initial_fields(cls, scene, initial) -> dict:
         """The boundary particles' fields at t = 0 (name -> (n_wall, ...) array), from where they
-        were laid (``initial.wall_layout``) and from the keys of their source (``sources``: the
-        scene's walls, then its obstacles; ``initial.wall_of`` indexes them). Every boundary model
+        were laid (``initial.wall_layout``) and from the keys of their source (the scene's walls,
+        then its obstacles: :func:`sources`, indexed by ``initial.wall_of``). Every boundary model
         has the plane geometry (the impermeability safeguard reads it); subclasses add theirs."""
         return dict(initial.wall_layout)
 
@@ -98,9 +103,10 @@ class GhostWalls(NoWalls):
     name = "ghost"
 
     @classmethod
-    def initial_fields(cls, sources, initial) -> dict:
+    def initial_fields(cls, scene, initial) -> dict:
         """beta_max [M36] and the ghost stress rule of each ghost's wall."""
-        fields = super().initial_fields(sources, initial)
+        fields = super().initial_fields(scene, initial)
+        sources = boundary_sources(scene)
         fields["wall_beta_max"] = np.array([sources[w].max_velocity_factor for w in initial.wall_of], float)
         fields["wall_extrapolation"] = np.array([float(sources[w].ghost_stress == "extrapolated")
                                                  for w in initial.wall_of])

@@ -12,10 +12,9 @@ one kind only keeps its single-kind model (scheme.boundary_class).
 import numpy as np
 import taichi as ti
 
-from ...bodies import Wall
 from ...state import FieldSpec
 from .dynamic import DynamicWalls
-from .ghost import GhostWalls
+from .ghost import GhostWalls, boundary_sources
 
 
 @ti.data_oriented
@@ -29,12 +28,12 @@ class GhostAndDynamicWalls(GhostWalls):
         self.coulomb = state.has("wall_friction")
 
     @classmethod
-    def initial_fields(cls, sources, initial) -> dict:
+    def initial_fields(cls, scene, initial) -> dict:
         """The ghosts' fields (obstacles have no ghost rule: beta_max 1, mirror stress, both unused)
         and the dynamic particles' Coulomb coefficient, with the flag of each particle's kind."""
-        fields = DynamicWalls.initial_fields(sources, initial)
-        dynamic = np.array([not isinstance(sources[w], Wall) or sources[w].type == "dynamic"
-                            for w in initial.wall_of], bool)
+        fields = DynamicWalls.initial_fields(scene, initial)
+        sources = boundary_sources(scene)
+        dynamic = np.array([scene.is_dynamic(sources[w]) for w in initial.wall_of], bool)
         ghost = [sources[w] if not d else None for w, d in zip(initial.wall_of, dynamic)]
         fields["wall_beta_max"] = np.array([1.0 if g is None else g.max_velocity_factor for g in ghost], float)
         fields["wall_extrapolation"] = np.array([float(g is not None and g.ghost_stress == "extrapolated")

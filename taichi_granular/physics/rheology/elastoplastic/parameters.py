@@ -37,6 +37,10 @@ class ElastoplasticMaterial(MaterialParameters):
         """Each key's range is checked by :func:`check_numbers`; no relations between keys."""
 
     @property
+    def wall_friction_deg(self) -> float:
+        return self.friction_angle_deg
+
+    @property
     def shear_modulus(self) -> float:
         """G = E/(2(1 + nu))  [Pa]."""
         return self.youngs_modulus / (2.0 * (1.0 + self.poisson_ratio))

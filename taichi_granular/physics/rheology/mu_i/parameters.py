@@ -89,6 +89,10 @@ class MuIMaterial(MaterialParameters):
         return None
 
     @property
+    def wall_friction_deg(self) -> float:
+        return self.static_friction_deg
+
+    @property
     def mu_s(self) -> float:
         return math.tan(math.radians(self.static_friction_deg))
 
