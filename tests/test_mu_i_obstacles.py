@@ -36,11 +36,11 @@ def chute_with_box(end_time=0.2, floor="chute", **numerics):
 
 @pytest.mark.parametrize("floor", ["chute", "ghost"])
 def test_mu_i_flow_on_a_chute_stops_at_a_box_obstacle(floor):
-    """The column collapses along the bed and hits the box (measured at dp = 4 mm on the chute: the
-    front arrives at 0.13 s and runs 9 cm up its face; on the ghost floor at 0.15 s, 6.9 cm up,
-    at rest by 0.4 s): no grain ever enters the box or passes it, none sinks through the bed
-    (below the first boundary row, dp/2 under it), and the front did reach the box (so the check
-    is not vacuous)."""
+    """The column collapses along the bed and hits the box (measured at dp = 4 mm, Coulomb boundaries
+    at their default delta = arctan(mu_s): on the chute the front arrives at 0.145 s and runs
+    5.4 cm up its face, on the ghost floor at 0.15 s and 5.8 cm; both at rest by 0.4 s): no grain
+    ever enters the box or passes it, none sinks through the bed (below the first boundary row,
+    dp/2 under it), and the front did reach the box (so the check is not vacuous)."""
     from taichi_granular.physics.walls import DynamicWalls, GhostAndDynamicWalls
     from taichi_granular.simulation import Simulation
 
