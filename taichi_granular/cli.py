@@ -199,7 +199,9 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("reference", parents=[common],
                        help="a generated reference page as Markdown: every scene key (meaning, unit, default, bounds, "
                             "from the declarations the loader checks) or every output field and column")
-    p.add_argument("page", choices=["keys", "outputs"], help="keys: the scene keys; outputs: VTU fields, diagnostics.csv")
+    p.add_argument("page", choices=["keys", "outputs", "validation"],
+                   help="keys: the scene keys; outputs: VTU fields, diagnostics.csv; validation: the summary of the "
+                        "validate runs under output/validate")
     p.add_argument("--out", help="write it to this file (docs/reference/PAGE.md) instead of printing it")
     p.set_defaults(func=cmd_reference)
 

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import dataclasses
 import typing
+from pathlib import Path
 from typing import List
 
 from . import config
@@ -185,4 +186,11 @@ def output_reference() -> str:
     return "\n".join(out) + "\n"
 
 
-REFERENCES = {"keys": key_reference, "outputs": output_reference}
+def validation_reference() -> str:
+    """The validation summary from the tables the validate runs wrote under output/validate."""
+    from .validation.table import markdown
+
+    return markdown(Path("output/validate"))
+
+
+REFERENCES = {"keys": key_reference, "outputs": output_reference, "validation": validation_reference}

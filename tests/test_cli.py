@@ -154,3 +154,20 @@ def test_every_validation_case_has_its_scenes_and_its_check():
             args = SimpleNamespace(cases=None, resolution=resolution)
             assert bool(case.patterns) == bool(_case_paths(case.folder, case.patterns, args) if case.patterns
                                                else []), (case.name, resolution)
+
+
+def test_validation_table_is_gathered_from_the_cases_tables(tmp_path):
+    """Each validate check writes table.csv beside its runs; `reference validation` gathers them in
+    the registry's order into one Markdown table (docs/validation/summary.md)."""
+    from taichi_granular.validation.table import Row, gather, markdown, write_rows
+
+    write_rows(tmp_path / "drum", [Row("drum: drum_omega1", "mean inclination; flowing depth", "30.8 deg; 46 mm",
+                                       "22.43 deg; 54 mm", "[P]'s table", "dp 5 mm, 1212 particles", "-", "FAIL")])
+    write_rows(tmp_path / "inclined_plane", [Row("inclined-plane: inclined_plane", "velocity profile, relative L2",
+                                                 "2.36 %", "-", "[M56] profile", "dp 5 mm, 920 particles",
+                                                 "111177 steps, 238 s", "PASS")])
+    rows = gather(tmp_path)
+    assert [r.case.split(":")[0] for r in rows] == ["inclined-plane", "drum"]
+    text = markdown(tmp_path)
+    assert "| inclined-plane: inclined_plane | velocity profile, relative L2 | 2.36 % |" in text
+    assert text.count("\n| ") == 3  # the header row and two cases

@@ -6,6 +6,7 @@ from ..config import load_scene
 from ..output import read_frame, read_series
 from ..paths import config_path
 from . import CASES
+from .table import record_run
 
 
 def validate(args) -> int:
@@ -32,6 +33,7 @@ def _frames(scene, out: Path, reuse: bool, quiet: bool, prepare=None):
         summary = sim.run()
         print(f"ran {scene.name}: {summary.steps} steps, {summary.wall_seconds:.1f} s wall, "
               f"{summary.particle_steps_per_second:.3g} particle-steps/s")
+        record_run(out, summary, sim.state.n_material)
     series = read_series(out)
     return [t for t, _ in series], [read_frame(p) for _, p in series]
 

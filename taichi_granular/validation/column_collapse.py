@@ -287,13 +287,16 @@ def check(case, runs, base, args) -> bool:
     from ..render.frames import write_png
     from ..render.plot import plot_points_and_curve
 
+    from .table import Row, cost, resolution, write_rows
+
     bound, at_rest = ACCEPTANCE[case.name]
-    results = []
+    results, where = [], []
     print(HEADER)
     for scene, out, times, frames in runs:
         result = evaluate(scene, times, frames, read_diagnostics(out), read_at_end=at_rest)
         write_fronts_csv(result, out / "fronts.csv")
         results.append(result)
+        where.append((resolution(scene, frames), cost(out)))
         print(result.row(), flush=True)
     buf = io.StringIO()
     def opt(t):
@@ -321,4 +324,10 @@ def check(case, runs, base, args) -> bool:
               "deposit creep at the speed shown (docs, column collapse)")
     print(f"acceptance (run-out within {100 * bound:.0f} % of Lube for a <= 3, at rest, none escaped): "
           f"{'PASS' if ok else 'FAIL'}; {base / 'runout.csv'}, {base / 'runout.png'}")
+    write_rows(base, [Row(f"{case.name}: {r.name}", f"run-out (r_inf - r0)/r0 at a = {r.aspect_ratio:.2f}",
+                          f"{r.runout:.3f} ({100 * r.error:+.1f} %)", "-",
+                          f"Lube et al. (2004): {r.runout_reference:.3f}", res, run_cost,
+                          "PASS" if (abs(r.error) < bound or r.aspect_ratio > 3.0) and r.time_to_rest is not None
+                          and r.escaped == 0 else "FAIL")
+                      for r, (res, run_cost) in zip(results, where)])
     return ok

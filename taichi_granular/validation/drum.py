@@ -164,12 +164,14 @@ def check(case, runs, base, args) -> bool:
     bed; writes velocity_profile.csv and .png per case."""
     from ..render.frames import write_png
     from ..render.plot import plot_points_and_curve
+    from .table import Row, cost, resolution, write_rows
 
-    results = []
+    results, where = [], []
     print(HEADER)
     for scene, out, times, frames in runs:
         result = evaluate_drum(scene, times, frames)
         results.append(result)
+        where.append((resolution(scene, frames), cost(out)))
         write_profile_csv(result, out / "velocity_profile.csv")
         image = plot_points_and_curve(list(zip(result.depth, result.velocity)), (result.depth, result.rigid_velocity),
                                       "depth below the surface on the middle cross-section (m)",
@@ -192,4 +194,9 @@ def check(case, runs, base, args) -> bool:
     print(f"acceptance (inclination within {INCLINATION_TOLERANCE_DEG} deg, depth within "
           f"{100 * DEPTH_TOLERANCE:.0f} %, both rising with omega, bed within 10 % of omega R of rigid rotation): "
           f"{'PASS' if ok else 'FAIL'}; profiles -> {base}/<case>/velocity_profile.csv, .png")
+    write_rows(base, [Row(f"{case.name}: {r.name}", "mean inclination; flowing depth",
+                          f"{r.inclination_deg:.1f} deg; {1e3 * r.flowing_depth:.0f} mm",
+                          "-" if r.reference is None else f"{r.reference[0]} deg; {1e3 * r.reference[1]:.0f} mm",
+                          "[P]'s table (out of this model's steady range: docs/models/hypoplastic.md)", res, run_cost,
+                          "PASS" if ok else "FAIL") for r, (res, run_cost) in zip(results, where)])
     return ok

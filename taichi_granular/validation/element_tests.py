@@ -332,4 +332,14 @@ def check(case, runs, base, args) -> bool:
     print(f"acceptance (triaxial ratio within 1 %, shear ratio within 2 %, each at its I_e within 0.0015 and "
           f"stationary; shear cell: no residual stress for C <= 0.504, residual at 0.524): "
           f"{'PASS' if ok else 'FAIL'}; {base / 'element_tests.csv'}")
+    from .table import Row, write_rows
+
+    patch, verdict = "patch of 8^3 particles", "PASS" if ok else "FAIL"
+    write_rows(base, [Row(f"{case.name}: {r.name}", "stationary stress ratio (at I_e)",
+                          f"{r.ratio:.4f} ({r.density_factor:.4f})", "-",
+                          f"MODEL.md point integration: {r.reference_ratio} ({r.reference_factor})", patch, "-",
+                          verdict) for r in stationary] +
+               [Row(f"{case.name}: annular cell C = 0.524", "residual sigma_xz / sigma_zz",
+                    f"{dense.sigma_xz:.1f} / {dense.sigma_zz:.1f} Pa", f"{ref['sigma_xz']} / {ref['sigma_zz']} Pa",
+                    "[P]'s shear cell (its own computation)", patch, "-", verdict)])
     return ok

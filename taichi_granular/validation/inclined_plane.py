@@ -423,14 +423,24 @@ def check(case, runs, base, args) -> bool:
     """mu(I) ([M56], both errors < 5 %) or hypoplastic + Bagnold (MODEL.md section 2: velocity
     within 10 % of the Bagnold-type profile, and no steady flow outside the bounding slopes).
     Writes profile.csv beside the run."""
-    ok = True
+    from .table import Row, cost, resolution, write_rows
+
+    ok, rows = True, []
     for scene, out, times, frames in runs:
-        ok &= _check_plane(scene, out, times, frames, args)
+        result = evaluate(scene, times, frames, window=args.window)
+        passed = _check_plane(scene, out, times, frames, args, result)
+        ok &= passed
+        name, verdict = f"{case.name}: {scene.name}", "PASS" if passed else "FAIL"
+        where = (resolution(scene, frames), cost(out), verdict)
+        rows.append(Row(name, "velocity profile, relative L2", f"{100 * result.velocity_error:.2f} %", "-",
+                        f"{result.reference} profile", *where))
+        rows.append(Row(name, "normal stress, relative L2", f"{100 * result.pressure_error:.2f} %", "-",
+                        "hydrostatic", *where))
+    write_rows(base, rows)
     return ok
 
 
-def _check_plane(scene, out, times, frames, args) -> bool:
-    result = evaluate(scene, times, frames, window=args.window)
+def _check_plane(scene, out, times, frames, args, result) -> bool:
     print(result.report())
     write_profile_csv(result, out / "profile.csv")
     if scene.material.model != "hypoplastic":

@@ -216,9 +216,10 @@ def check(case, runs, base, args) -> bool:
     """Cylinder (Cui & Gray 2013) and wedge (Tai et al. 2001) of [A]: bow shock, depth jump,
     particle-free wake and protected zone; writes obstacle_flow.csv per case."""
     from ..output import atomic_write_text
+    from .table import Row, cost, resolution, write_rows
 
     print(HEADER)
-    ok = True
+    ok, rows = True, []
     for scene, out, times, frames in runs:
         result = evaluate_obstacle_flow(scene, times, frames)
         atomic_write_text(out / "obstacle_flow.csv", "t,upstream_depth_m,depth_jump,standoff_m,wake_length_m,"
@@ -228,11 +229,21 @@ def check(case, runs, base, args) -> bool:
                               for f in result.frames))
         print(result.row(), flush=True)
         if "wedge" in scene.name:
-            ok &= result.shock_persists and result.protected_max == 0
+            passed = result.shock_persists and result.protected_max == 0
+            measure, ours = "bow shock; protected zone empty", (f"{'yes' if result.shock_persists else 'no'}; "
+                                                              f"{result.protected_max} particles inside")
+            reference = "Tai et al. (2001) experiment: shock, empty zone"
         else:
-            ok &= result.shock_persists and result.wake_persists
+            passed = result.shock_persists and result.wake_persists
+            measure, ours = "bow shock; closed wake", (f"{'yes' if result.shock_persists else 'no'}; "
+                                                       f"{'yes' if result.wake_persists else 'no'}")
+            reference = "Cui & Gray (2013) experiment: shock, closed wake"
+        ok &= passed
+        rows.append(Row(f"{case.name}: {scene.name}", measure, ours, "-", reference, resolution(scene, frames),
+                        cost(out), "PASS" if passed else "FAIL"))
     print(f"steady state: the last {100 * STEADY_FRACTION:.0f} % of the frames; shock: depth jump > "
           f"{SHOCK_JUMP}; wedge: 'inside' counts particles within {PROTECTED_LENGTH} m behind the building")
     print(f"acceptance (cylinder: shock and closed wake persist; wedge: shock persists, protected zone empty): "
           f"{'PASS' if ok else 'FAIL'}; per frame -> {base}/<case>/obstacle_flow.csv")
+    write_rows(base, rows)
     return ok

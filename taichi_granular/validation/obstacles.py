@@ -150,12 +150,14 @@ def check(case, runs, base, args) -> bool:
     """Stake rows cases 1-3 of [A]: efficiency factor against Yellin et al. (2013), within
     ACCEPTANCE_POINTS, case 2 the lowest, none crossed; writes leading_edge.csv per case."""
     from ..output import atomic_write_text
+    from .table import Row, cost, resolution, write_rows
 
-    results = []
+    results, where = [], []
     print(HEADER)
     for scene, out, times, frames in runs:
         result = evaluate_stake_rows(scene, times, frames)
         results.append(result)
+        where.append((resolution(scene, frames), cost(out)))
         atomic_write_text(out / "leading_edge.csv", "t,leading_edge_m\n" + "".join(
             f"{t:.4f},{e:.5f}\n" for t, e in zip(result.times, result.leading_edge)))
         print(result.row(), flush=True)
@@ -167,4 +169,8 @@ def check(case, runs, base, args) -> bool:
     ok = close and lowest
     print(f"acceptance (within {100 * ACCEPTANCE_POINTS:.0f} points, case 2 lowest, none crossed): "
           f"{'PASS' if ok else 'FAIL'}; leading edge over time -> {base}/<case>/leading_edge.csv")
+    write_rows(base, [Row(f"{case.name}: {r.name}", "efficiency factor (retained share)", f"{100 * r.efficiency:.1f} %",
+                          f"{100 * SPH_IN_PAPER.get(r.case, float('nan')):.0f} %",
+                          f"Yellin et al. (2013) experiment: {100 * r.reference:.0f} %", res, run_cost,
+                          "PASS" if ok else "FAIL") for r, (res, run_cost) in zip(results, where)])
     return ok
