@@ -104,12 +104,14 @@ class GhostWalls(NoWalls):
 
     @classmethod
     def initial_fields(cls, scene, initial) -> dict:
-        """beta_max [M36] and the ghost stress rule of each ghost's wall."""
+        """beta_max [M36] and the ghost stress rule of each ghost's wall (1 and mirror, both unused,
+        for a dynamic particle beside ghosts: walls/mixed.py)."""
         fields = super().initial_fields(scene, initial)
-        sources = boundary_sources(scene)
-        fields["wall_beta_max"] = np.array([sources[w].max_velocity_factor for w in initial.wall_of], float)
-        fields["wall_extrapolation"] = np.array([float(sources[w].ghost_stress == "extrapolated")
-                                                 for w in initial.wall_of])
+        ghosts = [None if scene.is_dynamic(source) else source for source in boundary_sources(scene)]
+        beta = np.array([1.0 if g is None else g.max_velocity_factor for g in ghosts] + [1.0], float)
+        extrapolated = np.array([float(g is not None and g.ghost_stress == "extrapolated") for g in ghosts] + [0.0])
+        fields["wall_beta_max"] = beta[initial.wall_of]
+        fields["wall_extrapolation"] = extrapolated[initial.wall_of]
         return fields
 
     @classmethod

@@ -18,32 +18,26 @@ from .ghost import GhostWalls, boundary_sources
 
 
 @ti.data_oriented
-class GhostAndDynamicWalls(GhostWalls):
+class GhostAndDynamicWalls(DynamicWalls, GhostWalls):
+    """Dynamic walls' density rate, friction and stress index (DynamicWalls, first in the MRO),
+    ghost walls' beta, stress extrapolation and impermeability (GhostWalls); the pair rules below
+    pick between the two by the particle's kind."""
+
     name = "ghost+dynamic"
     fields = GhostWalls.fields + DynamicWalls.fields + (
         FieldSpec("wall_dynamic", "scalar", "1 for a dynamic boundary particle, 0 for a ghost", "-", "wall"),)
 
-    def __init__(self, state, gravity=None):
-        super().__init__(state, gravity)
-        self.coulomb = state.has("wall_friction")
-
     @classmethod
     def initial_fields(cls, scene, initial) -> dict:
-        """The ghosts' fields (obstacles have no ghost rule: beta_max 1, mirror stress, both unused)
-        and the dynamic particles' Coulomb coefficient, with the flag of each particle's kind."""
-        fields = DynamicWalls.initial_fields(scene, initial)
+        """Both kinds' fields (GhostWalls', DynamicWalls') and the flag of each particle's kind."""
+        fields = super().initial_fields(scene, initial)
         sources = boundary_sources(scene)
-        dynamic = np.array([scene.is_dynamic(sources[w]) for w in initial.wall_of], bool)
-        ghost = [sources[w] if not d else None for w, d in zip(initial.wall_of, dynamic)]
-        fields["wall_beta_max"] = np.array([1.0 if g is None else g.max_velocity_factor for g in ghost], float)
-        fields["wall_extrapolation"] = np.array([float(g is not None and g.ghost_stress == "extrapolated")
-                                                 for g in ghost])
-        fields["wall_dynamic"] = dynamic.astype(float)
+        fields["wall_dynamic"] = np.array([float(scene.is_dynamic(sources[w])) for w in initial.wall_of])
         return fields
 
     @classmethod
-    def stage_classes(cls, scene):
-        return DynamicWalls.stage_classes(scene)
+    def position_stage_classes(cls, scene):
+        return GhostWalls.position_stage_classes(scene)
 
     @ti.func
     def is_ghost(self, j):
@@ -81,19 +75,6 @@ class GhostAndDynamicWalls(GhostWalls):
             n, s = self.extrapolation(i, j, x_ij)
             p = self.state.pressure[i] - s * ti.Vector(self.gravity).dot(n)
         return p
-
-    @ti.func
-    def stress_index(self, i, j):
-        """A ghost: i's; a dynamic particle: i's (rough), or none of its own with a Coulomb angle
-        (walls/dynamic.py)."""
-        k = j
-        n = self.state.n_material
-        if j >= n:
-            k = i
-            if ti.static(self.coulomb):
-                if self.state.wall_friction[j - n] >= 0.0:
-                    k = j
-        return k
 
     @ti.func
     def stress(self, i, j, x_ij, sigma_k):
