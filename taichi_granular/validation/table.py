@@ -36,8 +36,11 @@ def record_run(out: Path, summary, n_material: int) -> None:
 
 
 def resolution(scene, frames) -> str:
+    """dp and material particles, and the viscous scheme where it is the implicit one (the run-outs
+    of the tall collapses depend on it: docs/validation/column_collapse.md)."""
     n = int((frames[0]["is_wall"] == 0).sum()) if frames else 0
-    return f"dp {1e3 * scene.numerics.particle_spacing:g} mm, {n} particles"
+    implicit = ", implicit viscosity" if scene.numerics.implicit_viscosity else ""
+    return f"dp {1e3 * scene.numerics.particle_spacing:g} mm, {n} particles{implicit}"
 
 
 def cost(out: Path) -> str:
