@@ -248,9 +248,6 @@ class CylinderObstacle(_Obstacle):
     radius: float = scene_key("radius", unit="m", bounds="(0, 1e4]")
     height: float = scene_key("height along the local z axis", unit="m", bounds="(0, 1e4]")
 
-    def check(self, path: str, dim: int) -> None:
-        super().check(path, dim)
-
 
 @dataclass(frozen=True, kw_only=True)
 class WedgeObstacle(_Obstacle):
@@ -262,9 +259,6 @@ class WedgeObstacle(_Obstacle):
     length: float = scene_key("tip to rear face along local x", unit="m", bounds="(0, 1e4]")
     width: float = scene_key("rear face width across local y", unit="m", bounds="(0, 1e4]")
     height: float = scene_key("rear face height along local z", unit="m", bounds="(0, 1e4]")
-
-    def check(self, path: str, dim: int) -> None:
-        super().check(path, dim)
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -108,8 +108,8 @@ class GhostWalls(NoWalls):
         for a dynamic particle beside ghosts: walls/mixed.py)."""
         fields = super().initial_fields(scene, initial)
         ghosts = [None if scene.is_dynamic(source) else source for source in boundary_sources(scene)]
-        beta = np.array([1.0 if g is None else g.max_velocity_factor for g in ghosts] + [1.0], float)
-        extrapolated = np.array([float(g is not None and g.ghost_stress == "extrapolated") for g in ghosts] + [0.0])
+        beta = np.array([1.0 if g is None else g.max_velocity_factor for g in ghosts], float)
+        extrapolated = np.array([float(g is not None and g.ghost_stress == "extrapolated") for g in ghosts])
         fields["wall_beta_max"] = beta[initial.wall_of]
         fields["wall_extrapolation"] = extrapolated[initial.wall_of]
         return fields
