@@ -177,13 +177,15 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=cmd_render)
 
     from .validation import CASES
+    from .validation.cli import RESOLUTIONS
     p = sub.add_parser("validate", parents=[common], help="run a validation case and print its errors",
                        formatter_class=argparse.RawDescriptionHelpFormatter,
                        description="cases:\n" + "\n".join(f"  {c.name:<20}{c.summary}" for c in CASES.values()))
     p.add_argument("case", help="the validation case", choices=list(CASES))
-    p.add_argument("--resolution", choices=["coarse", "paper"], default="coarse",
-                   help="column-collapse-3d, stake-rows, obstacle-flow: the coarse CPU scenes or the paper's "
-                        "resolution (GPU)")
+    p.add_argument("--resolution", choices=list(RESOLUTIONS), default="coarse",
+                   help="column-collapse-3d, stake-rows, obstacle-flow: the coarse CPU scenes (*_coarse.yaml), "
+                        "the paper's dp on a CPU-sized scene where one exists (*_cpu.yaml: stake-rows), or the "
+                        "paper's resolution (GPU)")
     p.add_argument("--cases", nargs="+", help="only these (e.g. a0_90 a2_75; case1 case3; omega1)")
     p.add_argument("--config", help="scene file (default: the bundled one)")
     p.add_argument("--out", help="output directory (default: output/validate/<case>)")

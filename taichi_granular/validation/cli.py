@@ -38,21 +38,29 @@ def _frames(scene, out: Path, reuse: bool, quiet: bool, prepare=None):
     return [t for t, _ in series], [read_frame(p) for _, p in series]
 
 
+RESOLUTIONS = {"coarse": "_coarse", "cpu": "_cpu", "paper": ""}  # --resolution: the scene files' suffix
+
+
 def _case_paths(folder: str, pattern: str, args):
-    """The scene files of a validation family: ``pattern`` (or a list of them) names the coarse CPU variants;
-    ``--resolution paper`` picks the paper-resolution files instead; ``--cases`` filters by
-    stem, or by its end without the ``_coarse`` suffix (``a2_75``, ``case1``, ``cylinder``)."""
+    """The scene files of a validation family: ``pattern`` (or a list of them) names the coarse CPU variants
+    (``*_coarse.yaml``); ``--resolution cpu`` picks the ``*_cpu.yaml`` variants (the paper's dp on a
+    CPU-sized scene) and ``paper`` the paper-resolution files instead; ``--cases`` filters by stem,
+    or by its end without the suffix (``a2_75``, ``case1``, ``cylinder``)."""
     patterns = [pattern] if isinstance(pattern, str) else list(pattern)
-    if getattr(args, "resolution", "coarse") == "paper":
-        patterns = [p.replace("_coarse", "") for p in patterns]
+    suffix = RESOLUTIONS[getattr(args, "resolution", "coarse")]
+    others = [s for s in RESOLUTIONS.values() if s and s != suffix]
+    patterns = [p.replace("_coarse", suffix) for p in patterns]
     known = sorted(p for pat in patterns for p in config_path(folder).glob(pat)
-                   if "_coarse" in pat or "_coarse" not in p.stem)
+                   if not any(p.stem.endswith(other) for other in others))
+    if not known:
+        raise FileNotFoundError(f"no {getattr(args, 'resolution', 'coarse')} scenes for this case "
+                                f"({', '.join(patterns)} in configs/{folder})")
     if not args.cases:
         return known
     wanted = set(args.cases)
 
     def matches(stem: str, name: str) -> bool:
-        base = stem.replace("_coarse", "")
+        base = stem[: len(stem) - len(suffix)] if suffix and stem.endswith(suffix) else stem
         return name in (stem, base) or base.endswith("_" + name)
 
     paths = [p for p in known if any(matches(p.stem, w) for w in wanted)]
