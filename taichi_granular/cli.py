@@ -102,7 +102,17 @@ def cmd_validate(args) -> int:
 def cmd_reference(args) -> int:
     from .reference import REFERENCES
 
-    text = REFERENCES[args.page]()
+    if args.page == "validation":
+        from .validation.table import markdown, update_readme
+        roots = [Path(r) for r in args.root] or [Path("output/validate")]
+        text = markdown(*roots)
+        if args.readme:
+            update_readme(Path(args.readme), *roots)
+            print(f"validation table -> {args.readme}")
+    else:
+        if args.root or args.readme:
+            raise ValueError("--root and --readme belong to the validation page")
+        text = REFERENCES[args.page]()
     if args.out:
         from .output import atomic_write_text
         Path(args.out).parent.mkdir(parents=True, exist_ok=True)
@@ -205,6 +215,10 @@ def build_parser() -> argparse.ArgumentParser:
                    help="keys: the scene keys; outputs: VTU fields, diagnostics.csv; validation: the summary of the "
                         "validate runs under output/validate")
     p.add_argument("--out", help="write it to this file (docs/reference/PAGE.md) instead of printing it")
+    p.add_argument("--root", action="append", default=[],
+                   help="validation: a folder whose validate runs (their table.csv, found at any depth) make the "
+                        "table (repeatable; default output/validate)")
+    p.add_argument("--readme", help="validation: also write the table into this README's validation block")
     p.set_defaults(func=cmd_reference)
 
     p = sub.add_parser("bench", parents=[common], help="benchmarks (timing lives here, never in tests)")

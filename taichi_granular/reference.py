@@ -186,11 +186,4 @@ def output_reference() -> str:
     return "\n".join(out) + "\n"
 
 
-def validation_reference() -> str:
-    """The validation summary from the tables the validate runs wrote under output/validate."""
-    from .validation.table import markdown
-
-    return markdown(Path("output/validate"))
-
-
-REFERENCES = {"keys": key_reference, "outputs": output_reference, "validation": validation_reference}
+REFERENCES = {"keys": key_reference, "outputs": output_reference}  # validation: validation/table.py

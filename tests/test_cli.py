@@ -159,7 +159,8 @@ def test_every_validation_case_has_its_scenes_and_its_check():
 def test_validation_table_is_gathered_from_the_cases_tables(tmp_path):
     """Each validate check writes table.csv beside its runs; `reference validation` gathers them in
     the registry's order into one Markdown table (docs/validation/summary.md)."""
-    from taichi_granular.validation.table import Row, gather, markdown, write_rows
+    from taichi_granular.validation.table import (README_BEGIN, README_END, Row, gather, markdown,
+                                                  update_readme, write_rows)
 
     write_rows(tmp_path / "drum", [Row("drum: drum_omega1", "mean inclination; flowing depth", "30.8 deg; 46 mm",
                                        "22.43 deg; 54 mm", "[P]'s table", "dp 5 mm, 1212 particles", "-", "FAIL")])
@@ -171,3 +172,27 @@ def test_validation_table_is_gathered_from_the_cases_tables(tmp_path):
     text = markdown(tmp_path)
     assert "| inclined-plane: inclined_plane | velocity profile, relative L2 | 2.36 % |" in text
     assert text.count("\n| ") == 3  # the header row and two cases
+    # a run kept elsewhere (a campaign's folder) joins the table, in the registry's order
+    write_rows(tmp_path / "campaign" / "t3", [Row("column-collapse: collapse_a0_90", "run-out", "1.106 (-1.6 %)",
+                                                  "-", "Lube et al. (2004): 1.124", "dp 3.02 mm", "-", "PASS")])
+    assert [r.case.split(":")[0] for r in gather(tmp_path)] == ["inclined-plane", "column-collapse", "drum"]
+    # the README's block between its markers is replaced by the table, the rest kept
+    readme = tmp_path / "README.md"
+    readme.write_text(f"# title\n\n{README_BEGIN}\nold table\n{README_END}\n\nafter\n")
+    update_readme(readme, tmp_path)
+    written = readme.read_text()
+    assert "old table" not in written and written.startswith("# title") and written.endswith("\nafter\n")
+    assert written.count("\n| ") == 4 and "| column-collapse: collapse_a0_90 | run-out |" in written
+    # a sensitivity run's row says what it changed beyond dp and the viscous scheme
+    from types import SimpleNamespace
+    from taichi_granular.config import load_scene
+    from taichi_granular.paths import config_path
+    from taichi_granular.validation.table import record_run, resolution
+    scene = load_scene(config_path("mu_i/collapse_a0_19.yaml"), ["material.regularisation_time=3.6"])
+    record_run(tmp_path, SimpleNamespace(steps=10, wall_seconds=1.0, particle_steps_per_second=1.0), 5,
+               ["numerics.particle_spacing=0.0006", "material.regularisation_time=3.6"])
+    frames = [{"is_wall": np.zeros(5)}]
+    assert resolution(scene, frames, tmp_path) == "dp 1.2 mm, 5 particles, material.regularisation_time=3.6"
+    readme.write_text("# no block\n")
+    with pytest.raises(ValueError, match="no validation block"):
+        update_readme(readme, tmp_path)

@@ -22,7 +22,7 @@ def validate(args) -> int:
     return 0 if module.check(case, _each_case(paths, base, args, prepare), base, args) else 1
 
 
-def _frames(scene, out: Path, reuse: bool, quiet: bool, prepare=None):
+def _frames(scene, out: Path, reuse: bool, quiet: bool, prepare=None, overrides=()):
     """Frames of ``scene`` in ``out``: run it first unless ``reuse``; ``prepare(sim)`` may set
     the initial state before the run."""
     if not reuse:
@@ -33,7 +33,7 @@ def _frames(scene, out: Path, reuse: bool, quiet: bool, prepare=None):
         summary = sim.run()
         print(f"ran {scene.name}: {summary.steps} steps, {summary.wall_seconds:.1f} s wall, "
               f"{summary.particle_steps_per_second:.3g} particle-steps/s")
-        record_run(out, summary, sim.state.n_material)
+        record_run(out, summary, sim.state.n_material, overrides)
     series = read_series(out)
     return [t for t, _ in series], [read_frame(p) for _, p in series]
 
@@ -75,5 +75,5 @@ def _each_case(paths, base: Path, args, prepare=None):
     for path in paths:
         scene = load_scene(path, args.set)
         out = base / scene.name
-        times, frames = _frames(scene, out, args.reuse, args.quiet, prepare)
+        times, frames = _frames(scene, out, args.reuse, args.quiet, prepare, args.set or ())
         yield scene, out, times, frames

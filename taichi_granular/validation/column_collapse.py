@@ -8,21 +8,24 @@ the largest cluster of particles joined when closer than 1.5 dp, so that grains 
 ahead of the flow are not the front) -- in 2D the
 left and right ones, in 3D the outermost in each of SECTORS equal azimuthal sectors around
 the axis -- their mean distance from the column axis, the deposit height (the highest particle top), and the
-particles that have escaped (no other particle within the kernel support 2h).
+particles that have escaped: lost through an open face of the domain, or isolated (no other
+particle within the kernel support 2h; e.g. a grain come to rest a little ahead of the toe).
 r0 and H0 are measured the same way on the first frame (the column as laid on the particle
 lattice), and a = H0/r0. Beside the front, the bulk run-out (R - R0)/R0 with R the distance from
 the axis within which BULK_FRACTION of the mass lies: the outermost grain is known to +-1 dp
 (a tenth of r0 at 10 particles per half-width), the mass distribution to far better, so schemes
-and resolutions are compared on it as well (it is not Lube's quantity). The column is at rest when the kinetic energy has fallen below 1e-3 of its peak.
+and resolutions are compared on it as well (it is not Lube's quantity).
 
 When the run-out is read: the regularised viscosity [M48] is finite below yield (about m_0 tau_y),
 so a deposit whose surface slopes creeps at a strain rate of about (tau/tau_y)/m_0 that does not
-decay. The front stops abruptly (its speed drops by two orders of magnitude within two frames)
-and then creeps at about 1 % of its peak speed for as long as the run goes on. r_inf is read
-where an experimentalist reads it, when the front stops: the first frame after the front's peak
-speed from which it never again runs ahead faster than FRONT_STOP_FRACTION of that peak (a
-pause followed by a second surge is no stop). The creep speed
-afterwards and the kinetic energy left at the end are reported beside it.
+decay, and its kinetic energy levels off instead of falling below REST_FRACTION of its peak.
+Rest is therefore the front's: the front has stopped at the first frame after its peak speed
+from which it runs ahead slower than FRONT_STOP_FRACTION of that peak for FRONT_STOP_WINDOW
+seconds (measured as the advance from that frame to each frame of the window), and never
+again faster than SURGE_FRACTION of the peak (a pause followed by a second surge is no stop).
+r_inf is read there, as an experimentalist reads it; the creep speed afterwards (also as a
+share of the peak) and the kinetic-energy plateau (its median over the frames after the stop,
+over its peak) are reported beside it. A front that never stops so is read at the end.
 """
 from __future__ import annotations
 
@@ -39,7 +42,9 @@ from ..config import Scene
 from ..output import left_domain
 
 REST_FRACTION = 1e-3  # at rest: kinetic energy below this share of its peak
-FRONT_STOP_FRACTION = 0.05  # the front has stopped: its speed below this share of its peak speed
+FRONT_STOP_FRACTION = 0.01  # the front has stopped: slower than this share of its peak speed ...
+FRONT_STOP_WINDOW = 0.1  # [s] ... for this long
+SURGE_FRACTION = 0.05  # ... and never again faster than this share of its peak (no second surge)
 BULK_FRACTION = 0.98  # the bulk run-out: the distance from the axis within which this share of the mass lies
 SECTORS = 16  # 3D: azimuthal sectors whose outermost particles make the front
 
@@ -122,6 +127,7 @@ class FrameMeasure:
     front_mean: float  # [m] from the axis: mean of the two fronts (2D) or of the sector fronts (3D)
     height: float  # [m]
     escaped: int  # particles with no other particle within the kernel support 2h, or out of the domain
+    lost: int  # of those, out of the domain
     bulk_extent: float  # [m] from the axis: within it lies BULK_FRACTION of the mass
 
 
@@ -148,6 +154,7 @@ def measure_frame(arrays: Dict[str, np.ndarray], n_material: int, centre: np.nda
                         front_mean=float(fronts.mean()),
                         height=float(np.max(x[ok, dim - 1] + radius[ok])),
                         escaped=int(n_material - connected(x[inside], support).sum()),
+                        lost=int(n_material - inside.sum()),
                         bulk_extent=mass_quantile(distance_all, arrays["mass"][:n_material][inside], BULK_FRACTION))
 
 
@@ -169,12 +176,15 @@ class CollapseResult:
     runout_reference: float  # Lube et al. (2004)
     deposit_height: float  # [m], when the front stopped
     front_stop_time: Optional[float]  # [s], None if the front never stopped
+    peak_front_speed: float  # [m/s] the front's fastest advance between two frames
     creep_speed: float  # [m/s] mean front speed from the stop to the end (0 if no frames after it)
     runout_end: float  # (r_inf - r0)/r0 at the last frame
     bulk_runout_end: float  # (R - R0)/R0 at the last frame, R the BULK_FRACTION mass extent
     time_to_rest: Optional[float]  # [s], kinetic energy below REST_FRACTION of its peak; None if never
     final_energy_fraction: float  # kinetic energy at the end over its peak
-    escaped: int  # at the end: particles that interact with no other
+    energy_plateau: float  # median kinetic energy after the front stop (the last window if none) over its peak
+    escaped: int  # at the end: particles that interact with no other (isolated, or lost)
+    lost: int  # at the end: particles lost through an open face of the domain
     end_time: float
     fronts: List[FrameMeasure] = field(default_factory=list)
 
@@ -182,34 +192,69 @@ class CollapseResult:
     def error(self) -> float:
         return (self.runout - self.runout_reference) / self.runout_reference
 
+    @property
+    def creep_share(self) -> float:
+        """Creep speed after the stop over the front's peak speed."""
+        return self.creep_speed / self.peak_front_speed if self.peak_front_speed > 0 else 0.0
+
+    def passes(self, bound: float, at_rest: bool) -> bool:
+        """Run-out within ``bound`` of Lube's, no grain lost from the domain, and at rest: the
+        deposit's kinetic energy below REST_FRACTION of its peak (``at_rest``), else the front
+        stopped. Isolated grains are reported, not failed: one at rest a few mm ahead of the toe
+        is part of the deposit that the front ignores."""
+        rest = self.time_to_rest is not None if at_rest else self.front_stop_time is not None
+        return abs(self.error) < bound and rest and self.lost == 0
+
     def row(self) -> str:
         def opt(t):
             return f"{t:6.3f}" if t is not None else "  none"
         return (f"{self.name:<16} {self.aspect_ratio:5.2f} {self.runout:8.3f} {self.runout_reference:8.3f} "
                 f"{100 * self.error:+7.1f} % {1e3 * self.deposit_height:8.1f} {opt(self.front_stop_time)} "
-                f"{1e3 * self.creep_speed:8.2f} {self.runout_end:7.3f} {self.bulk_runout_end:7.3f} {self.end_time:6.2f} "
-                f"{opt(self.time_to_rest)} {self.final_energy_fraction:9.1e} {self.escaped:7d}")
+                f"{1e3 * self.peak_front_speed:7.1f} {1e3 * self.creep_speed:8.2f} {100 * self.creep_share:6.2f} "
+                f"{self.runout_end:7.3f} {self.bulk_runout_end:7.3f} {self.end_time:6.2f} "
+                f"{opt(self.time_to_rest)} {self.final_energy_fraction:9.1e} {self.energy_plateau:9.1e} {self.escaped:7d} {self.lost:4d}")
 
 
 HEADER = (f"{'case':<16} {'a':>5} {'run-out':>8} {'Lube':>8} {'error':>9} {'H_inf mm':>8} {'stop s':>6} "
-          f"{'creep mm/s':>8} {'at end':>7} {'bulk end':>7} {'end s':>6} {'rest s':>6} {'KE_end/pk':>9} {'escaped':>7}")
+          f"{'peak mm/s':>7} {'creep mm/s':>8} {'creep%':>6} {'at end':>7} {'bulk end':>7} {'end s':>6} {'rest s':>6} "
+          f"{'KE_end/pk':>9} {'KE_plat':>9} {'escaped':>7} {'lost':>4}")
 
 
-def front_stop(times: Sequence[float], front: Sequence[float]) -> Optional[int]:
-    """Index of the first frame after the front's peak speed from which it never again gets
-    further ahead than FRONT_STOP_FRACTION of that peak speed times the elapsed time; None if
-    there is no such frame before the last. A pause is not a stop: a front that halts (or whose
-    tip detaches, so that the reading steps back) and then runs on is still moving."""
+def peak_speed(times: Sequence[float], front: Sequence[float]) -> tuple:
+    """(index k of the fastest frame interval, its speed): the front's peak speed, between frames
+    k and k + 1. Measured on the front's running maximum: a tip that detaches (the reading steps
+    back) and is caught up again within a frame or two is not a burst of speed."""
+    t, x = np.asarray(times, float), np.maximum.accumulate(np.asarray(front, float))
+    if len(t) < 2:
+        return 0, 0.0
+    speed = np.diff(x) / np.diff(t)
+    peak = int(np.argmax(speed))
+    return peak, float(speed[peak])
+
+
+def front_stop(times: Sequence[float], front: Sequence[float], at_rest_at_end: bool = False) -> Optional[int]:
+    """Index of the frame at which the front stopped (module docstring): the first after its
+    peak speed from which it runs ahead slower than FRONT_STOP_FRACTION of the peak for
+    FRONT_STOP_WINDOW seconds and never again faster than SURGE_FRACTION of it; None if there is
+    no such frame (a window must fit before the last frame, unless the run ended ``at_rest_at_end``:
+    its kinetic energy below REST_FRACTION of the peak, so that the front moves no further). A
+    front whose tip detaches steps back; a grain joining it steps on: both are measured as
+    advances from the frame."""
     t, x = np.asarray(times, float), np.asarray(front, float)
     if len(t) < 3:
         return None
-    speed = np.diff(x) / np.diff(t)  # speed[k]: between frames k and k + 1
-    peak = int(np.argmax(speed))
-    if speed[peak] <= 0.0:
+    peak, top = peak_speed(t, x)
+    if top <= 0.0:
         return None
+    slack = 1e-9 * max(1.0, t[-1])
     for k in range(peak + 1, len(t) - 1):
+        if t[-1] < t[k] + FRONT_STOP_WINDOW - slack and not at_rest_at_end:
+            return None
+        elapsed = t[k + 1:] - t[k]
         ahead = x[k + 1:] - x[k]
-        if np.all(ahead <= FRONT_STOP_FRACTION * speed[peak] * (t[k + 1:] - t[k])):
+        window = elapsed <= FRONT_STOP_WINDOW + slack
+        if (np.all(ahead[window] <= FRONT_STOP_FRACTION * top * elapsed[window])
+                and np.all(ahead <= SURGE_FRACTION * top * elapsed)):
             return k
     return None
 
@@ -236,21 +281,26 @@ def evaluate(scene: Scene, times: Sequence[float], frames: Sequence[Dict[str, np
     mean = [m.front_mean for m in fronts]
     first, final = fronts[0], fronts[-1]
     r0, height = mean[0], first.height  # as laid on the lattice
-    stop = front_stop(times, mean)
+    ke = np.array([d["kinetic_energy"] for d in diagnostics], float)
+    ke_times = np.array([d["t"] for d in diagnostics], float)
+    rest = time_to_rest(ke_times, ke)
+    stop = front_stop(times, mean, at_rest_at_end=rest is not None)
     read = stop if stop is not None and not read_at_end else len(fronts) - 1
     t_end = float(times[-1])
     creep = (mean[-1] - mean[read]) / (t_end - times[read]) if t_end > times[read] else 0.0
-    ke = [d["kinetic_energy"] for d in diagnostics]
-    rest = time_to_rest([d["t"] for d in diagnostics], ke)
+    after = ke_times >= (times[stop] if stop is not None else t_end - FRONT_STOP_WINDOW)
+    plateau = float(np.median(ke[after])) / ke.max() if ke.max() > 0 and np.any(after) else 0.0
     a = height / r0
     return CollapseResult(name=scene.name, aspect_ratio=a, r0=r0, runout=(mean[read] - r0) / r0,
                           runout_reference=lube_runout(a), deposit_height=fronts[read].height,
-                          front_stop_time=None if stop is None else float(times[stop]), creep_speed=creep,
+                          front_stop_time=None if stop is None else float(times[stop]),
+                          peak_front_speed=peak_speed(times, mean)[1], creep_speed=creep,
                           runout_end=(mean[-1] - r0) / r0,
                           bulk_runout_end=(final.bulk_extent - first.bulk_extent) / first.bulk_extent,
                           time_to_rest=rest,
-                          final_energy_fraction=ke[-1] / max(ke) if max(ke) > 0 else 0.0,
-                          escaped=final.escaped, end_time=t_end, fronts=fronts)
+                          final_energy_fraction=float(ke[-1] / ke.max()) if ke.max() > 0 else 0.0,
+                          energy_plateau=plateau,
+                          escaped=final.escaped, lost=final.lost, end_time=t_end, fronts=fronts)
 
 
 def write_fronts_csv(result: CollapseResult, path: Path) -> None:
@@ -278,9 +328,25 @@ ACCEPTANCE = {
 }
 
 
+# the paper's own figure for the validation table: none of the three tabulates its run-outs
+PAPER = {
+    "column-collapse": "[M]: on Lube's line up to a = 3 (figure only)",
+    "column-collapse-3d": "-",
+    "pile-collapse": "-",
+}
+
+
+def _csv_value(value) -> str:
+    if value is None:
+        return ""
+    if isinstance(value, float):
+        return f"{value:.5g}"
+    return str(value)
+
+
 def check(case, runs, base, args) -> bool:
-    """Run-out against Lube et al. (2004) within the family's bound for a <= 3, at rest, none
-    escaped; writes fronts.csv per case, runout.csv and runout.png for the family."""
+    """Run-out against Lube et al. (2004) within the family's bound, at rest (mu(I): the front
+    stopped), none lost; writes fronts.csv per case, runout.csv and runout.png for the family."""
     import io
 
     from ..output import atomic_write_text, read_diagnostics
@@ -296,38 +362,37 @@ def check(case, runs, base, args) -> bool:
         result = evaluate(scene, times, frames, read_diagnostics(out), read_at_end=at_rest)
         write_fronts_csv(result, out / "fronts.csv")
         results.append(result)
-        where.append((resolution(scene, frames), cost(out)))
+        where.append((resolution(scene, frames, out), cost(out)))
         print(result.row(), flush=True)
+    columns = ["case", "aspect_ratio", "runout", "runout_lube", "error", "deposit_height", "front_stop_time",
+               "peak_front_speed", "creep_speed", "creep_share", "runout_end", "bulk_runout_end", "end_time",
+               "time_to_rest", "final_energy_fraction", "energy_plateau", "escaped", "lost"]
     buf = io.StringIO()
-    def opt(t):
-        return "" if t is None else f"{t:.4f}"
-
-    buf.write("case,aspect_ratio,runout,runout_lube,error,deposit_height,front_stop_time,creep_speed,"
-              "runout_end,bulk_runout_end,end_time,time_to_rest,final_energy_fraction,escaped\n")
+    writer = csv.writer(buf)
+    writer.writerow(columns)
     for r in results:
-        buf.write(f"{r.name},{r.aspect_ratio:.4f},{r.runout:.4f},{r.runout_reference:.4f},{r.error:.4f},"
-                  f"{r.deposit_height:.5f},{opt(r.front_stop_time)},{r.creep_speed:.3e},{r.runout_end:.4f},{r.bulk_runout_end:.4f},"
-                  f"{r.end_time:.4f},{opt(r.time_to_rest)},{r.final_energy_fraction:.3e},{r.escaped}\n")
+        values = {"case": r.name, "runout_lube": r.runout_reference, "error": r.error, "creep_share": r.creep_share}
+        writer.writerow([_csv_value(values[c] if c in values else getattr(r, c)) for c in columns])
     atomic_write_text(base / "runout.csv", buf.getvalue())
     a = np.linspace(0.01, max(3.2, max(r.aspect_ratio for r in results) * 1.05), 200)
     image = plot_points_and_curve([(r.aspect_ratio, r.runout) for r in results],
                                   (a, np.array([lube_runout(x) for x in a])),
                                   "aspect ratio a", "(r_inf - r0)/r0", "line: lube et al. 2004, squares: sph")
     write_png(base / "runout.png", image)
-    ok = all((abs(r.error) < bound or r.aspect_ratio > 3.0) and r.time_to_rest is not None and r.escaped == 0
-             for r in results)
+    ok = all(r.passes(bound, at_rest) for r in results)
     if at_rest:
-        print("run-out read at the end of the run (the deposit at rest)")
+        print("run-out read at the end of the run (the deposit at rest: kinetic energy below "
+              f"{REST_FRACTION:g} of its peak)")
     else:
-        print("run-out read when the front stops (from then on it never runs ahead faster than "
-              f"{100 * FRONT_STOP_FRACTION:.0f} % of its peak speed); afterwards the regularised viscosity lets the "
-              "deposit creep at the speed shown (docs, column collapse)")
-    print(f"acceptance (run-out within {100 * bound:.0f} % of Lube for a <= 3, at rest, none escaped): "
+        print(f"run-out read when the front stops (slower than {100 * FRONT_STOP_FRACTION:g} % of its peak speed "
+              f"for {FRONT_STOP_WINDOW:g} s, never again faster than {100 * SURGE_FRACTION:g} %); afterwards the "
+              "regularised viscosity lets the deposit creep at the speed shown (docs, column collapse)")
+    rest = "at rest" if at_rest else "front stopped"
+    print(f"acceptance (run-out within {100 * bound:.0f} % of Lube, {rest}, no grain lost from the domain): "
           f"{'PASS' if ok else 'FAIL'}; {base / 'runout.csv'}, {base / 'runout.png'}")
     write_rows(base, [Row(f"{case.name}: {r.name}", f"run-out (r_inf - r0)/r0 at a = {r.aspect_ratio:.2f}",
-                          f"{r.runout:.3f} ({100 * r.error:+.1f} %)", "-",
+                          f"{r.runout:.3f} ({100 * r.error:+.1f} %)", PAPER[case.name],
                           f"Lube et al. (2004): {r.runout_reference:.3f}", res, run_cost,
-                          "PASS" if (abs(r.error) < bound or r.aspect_ratio > 3.0) and r.time_to_rest is not None
-                          and r.escaped == 0 else "FAIL")
+                          "PASS" if r.passes(bound, at_rest) else "FAIL")
                       for r, (res, run_cost) in zip(results, where)])
     return ok

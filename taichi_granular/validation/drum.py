@@ -171,7 +171,7 @@ def check(case, runs, base, args) -> bool:
     for scene, out, times, frames in runs:
         result = evaluate_drum(scene, times, frames)
         results.append(result)
-        where.append((resolution(scene, frames), cost(out)))
+        where.append((resolution(scene, frames, out), cost(out)))
         write_profile_csv(result, out / "velocity_profile.csv")
         image = plot_points_and_curve(list(zip(result.depth, result.velocity)), (result.depth, result.rigid_velocity),
                                       "depth below the surface on the middle cross-section (m)",

@@ -431,7 +431,7 @@ def check(case, runs, base, args) -> bool:
         passed = _check_plane(scene, out, times, frames, args, result)
         ok &= passed
         name, verdict = f"{case.name}: {scene.name}", "PASS" if passed else "FAIL"
-        where = (resolution(scene, frames), cost(out), verdict)
+        where = (resolution(scene, frames, out), cost(out), verdict)
         rows.append(Row(name, "velocity profile, relative L2", f"{100 * result.velocity_error:.2f} %", "-",
                         f"{result.reference} profile", *where))
         rows.append(Row(name, "normal stress, relative L2", f"{100 * result.pressure_error:.2f} %", "-",

@@ -239,7 +239,7 @@ def check(case, runs, base, args) -> bool:
                                                        f"{'yes' if result.wake_persists else 'no'}")
             reference = "Cui & Gray (2013) experiment: shock, closed wake"
         ok &= passed
-        rows.append(Row(f"{case.name}: {scene.name}", measure, ours, "-", reference, resolution(scene, frames),
+        rows.append(Row(f"{case.name}: {scene.name}", measure, ours, "-", reference, resolution(scene, frames, out),
                         cost(out), "PASS" if passed else "FAIL"))
     print(f"steady state: the last {100 * STEADY_FRACTION:.0f} % of the frames; shock: depth jump > "
           f"{SHOCK_JUMP}; wedge: 'inside' counts particles within {PROTECTED_LENGTH} m behind the building")

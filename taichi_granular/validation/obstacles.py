@@ -157,7 +157,7 @@ def check(case, runs, base, args) -> bool:
     for scene, out, times, frames in runs:
         result = evaluate_stake_rows(scene, times, frames)
         results.append(result)
-        where.append((resolution(scene, frames), cost(out)))
+        where.append((resolution(scene, frames, out), cost(out)))
         atomic_write_text(out / "leading_edge.csv", "t,leading_edge_m\n" + "".join(
             f"{t:.4f},{e:.5f}\n" for t, e in zip(result.times, result.leading_edge)))
         print(result.row(), flush=True)
