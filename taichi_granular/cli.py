@@ -94,6 +94,26 @@ def cmd_describe(args) -> int:
     return 0
 
 
+def cmd_sweep(args) -> int:
+    """0 if every run finished, 1 if some failed (recorded in results.csv)."""
+    from .sweep import load_sweep, run_sweep
+    from .sweep.engine import dask_available
+
+    sweep = load_sweep(args.sweep)
+    if args.out:
+        sweep.out = Path(args.out)
+    if (args.scheduler or args.workers != 0) and not dask_available():
+        raise ConfigError("--workers", "Dask is not installed: pip install -e \".[sweep]\" (or --workers 0 to run "
+                                       "the points one after another without it)")
+    results = run_sweep(sweep, workers=args.workers, scheduler=args.scheduler, threads=args.threads,
+                        resume=args.resume, quiet=args.quiet)
+    failed = sorted(k for k, r in results.items() if r.get("status") != "ok")
+    print(f"{len(results) - len(failed)} of {len(results)} runs finished"
+          + (f"; failed: {', '.join(failed)} (their errors in results.csv)" if failed else "")
+          + f"; {Path(sweep.out) / 'results.csv'}, plots in {Path(sweep.out) / 'plots'}")
+    return 1 if failed else 0
+
+
 def cmd_validate(args) -> int:
     from .validation.cli import validate
     return validate(args)
@@ -208,6 +228,26 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=cmd_validate)
 
+    from .sweep.measures import NAMED, REDUCERS
+    p = sub.add_parser("sweep", parents=[common], help="a parameter sweep or ensemble of a scene on Dask",
+                       formatter_class=argparse.RawDescriptionHelpFormatter,
+                       description="Runs every point of SWEEP.yaml (a base scene, axes or a Latin-hypercube sample "
+                                   "of --set keys, measures; docs/usage.md, sweeps) in a process of its own on Dask "
+                                   "distributed, and writes results.csv and plots.\nmeasures: "
+                                   + ", ".join(NAMED) + f", {'|'.join(REDUCERS)}:COLUMN of diagnostics.csv")
+    p.add_argument("sweep", help="the sweep file (YAML)")
+    p.add_argument("--scheduler", help="address of a running Dask scheduler (tcp://host:8786); default: a "
+                                       "LocalCluster on this machine")
+    p.add_argument("--workers", type=int, help="LocalCluster worker processes (default: one per core; 0: no "
+                                               "Dask, the runs one after another here)")
+    p.add_argument("--threads", type=int, help="Taichi CPU threads per run (default: cores // workers on a "
+                                               "LocalCluster, all of the worker machine's with --scheduler)")
+    p.add_argument("--resume", action="store_true", help="keep the finished runs in the sweep's folder and run "
+                                                         "the rest (failed and missing ones)")
+    p.add_argument("--out", help="the sweep's folder (default: the sweep file's out)")
+    p.add_argument("--quiet", action="store_true", help="no progress lines")
+    p.set_defaults(func=cmd_sweep)
+
     p = sub.add_parser("reference", parents=[common],
                        help="a generated reference page as Markdown: every scene key (meaning, unit, default, bounds, "
                             "from the declarations the loader checks) or every output field and column")
@@ -251,6 +291,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out",
                    help="accuracy: output folder (default renders/accuracy, quick: output/bench/accuracy_quick)")
     p.add_argument("--timeout", type=float, default=3600.0, help="accuracy: seconds allowed per run")
+    p.add_argument("--workers", type=int, default=0,
+                   help="accuracy: run on a Dask LocalCluster of this many workers (as `sweep` does; default 0: "
+                        "one run after another, since the study measures wall time)")
+    p.add_argument("--scheduler", help="accuracy: run on the Dask scheduler at this address")
     p.add_argument("--no-readme", action="store_true", help="accuracy: do not rewrite the study section of docs/accuracy.md")
     p.add_argument("--reuse", action="store_true",
                    help="accuracy: keep the runs that succeeded in the output folder's accuracy.csv, run the rest")

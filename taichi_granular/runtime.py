@@ -6,10 +6,13 @@ existing field, so do it before building a simulation).
 """
 from __future__ import annotations
 
+import os
+
 import taichi as ti
 
 ARCHES = {"cpu": "cpu", "cuda": "cuda", "vulkan": "vulkan", "metal": "metal", "gpu": "gpu"}
 _current: tuple | None = None
+THREADS_ENV = "TAICHI_GRANULAR_CPU_THREADS"  # Taichi's CPU threads, when set (a sweep's runs)
 
 # Every top-level particle loop is written ``ti.loop_config(serialize=runtime.serial_loops)``.
 # Taichi reads the flag when it compiles a kernel (at its first launch), so the scheme sets it
@@ -32,8 +35,11 @@ def init(arch: str = "cpu", precision: str = "f64", force: bool = False) -> None
     if _current == key and not force:
         return
     fp = ti.f64 if precision == "f64" else ti.f32
+    # a sweep's worker runs each job with cores // workers threads (sweep/engine.py)
+    threads = os.environ.get(THREADS_ENV)
+    extra = {"cpu_max_num_threads": int(threads)} if threads else {}
     ti.init(arch=getattr(ti, ARCHES[arch]), default_fp=fp, default_ip=ti.i32,
-            random_seed=0, log_level=ti.WARN)
+            random_seed=0, log_level=ti.WARN, **extra)
     _current = key
 
 

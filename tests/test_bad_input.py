@@ -13,7 +13,9 @@ from taichi_granular.cli import main
 from taichi_granular.output import read_checkpoint
 from taichi_granular.paths import config_path
 
-CONFIGS = sorted(p.relative_to(config_path("")).as_posix() for p in config_path("").rglob("*.yaml"))
+# the scenes (configs/sweeps holds sweep files, checked by tests/test_sweep.py)
+CONFIGS = sorted(p.relative_to(config_path("")).as_posix() for p in config_path("").rglob("*.yaml")
+                 if p.parent.name != "sweeps")
 # values no key accepts: every numeric key has finite plausible bounds (config._key)
 BAD_NUMBERS = [float("nan"), "nan", float("inf"), "-inf", 1e30, -1e30, "1e400"]
 

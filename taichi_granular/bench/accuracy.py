@@ -29,10 +29,7 @@ from __future__ import annotations
 
 import csv
 import io
-import json
 import math
-import subprocess
-import sys
 import time
 from dataclasses import asdict, dataclass, field, replace
 from functools import lru_cache
@@ -219,12 +216,10 @@ def measure(case: Case, overrides: Sequence[str], profile_steps: int = 200) -> d
     }
 
 
-def _child() -> None:
-    """Entry of the child process: a JSON job on stdin, the JSON row on the last stdout line."""
-    job = json.loads(sys.stdin.read())
-    case = Case(**{k: tuple(v) if isinstance(v, list) else v for k, v in job["case"].items()})
-    row = measure(case, job["overrides"])
-    print("\n" + json.dumps(row))
+def measure_job(payload: dict) -> dict:
+    """One run as a job of sweep/engine.py (in a process of its own): its row of the CSV."""
+    case = Case(**{k: tuple(v) if isinstance(v, list) else v for k, v in payload["case"].items()})
+    return measure(case, payload["overrides"])
 
 
 # ---- the sweep -----------------------------------------------------------------------------------
@@ -276,20 +271,17 @@ def plan(cases: Sequence[Case]) -> List[Run]:
     return runs
 
 
-def execute(run: Run, timeout: float) -> dict:
-    """Run one point in a fresh Python process; a failed run becomes a row with error NaN and
-    its last message in ``note``."""
-    job = json.dumps({"case": asdict(run.case), "overrides": list(run.overrides)})
-    try:
-        proc = subprocess.run([sys.executable, "-c", "from taichi_granular.bench.accuracy import _child; _child()"],
-                              input=job, capture_output=True, text=True, timeout=timeout)
-    except subprocess.TimeoutExpired:
-        return {"error": float("nan"), "note": f"timed out after {timeout:.0f} s"}
-    lines = [ln for ln in proc.stdout.strip().splitlines() if ln.startswith("{")]
-    if proc.returncode != 0 or not lines:
-        reason = (proc.stderr.strip().splitlines() or ["no output"])[-1]
-        return {"error": float("nan"), "note": f"failed: {reason[:300]}"}
-    return json.loads(lines[-1])
+def job(run: Run, index: int):
+    from ..sweep.engine import Job
+    return Job(f"{index:03d}", "taichi_granular.bench.accuracy:measure_job",
+               {"case": asdict(run.case), "overrides": list(run.overrides)})
+
+
+def row_of(result: dict) -> dict:
+    """A job's result as a CSV row: a failed run has error NaN and its message in ``note``."""
+    if result.get("status") != "ok":
+        return {"error": float("nan"), "note": f"failed: {result.get('error', '')[:300]}"}
+    return {k: v for k, v in result.items() if k not in ("status", "job_seconds")}
 
 
 # ---- analysis ------------------------------------------------------------------------------------
@@ -477,28 +469,43 @@ def read_rows(path: Path) -> Dict[Tuple[str, str, str], dict]:
     return rows
 
 
-def sweep(cases: Sequence[Case], out: Path, timeout: float = 3600.0, echo=print, reuse: bool = False) -> List[Run]:
-    """Every run of ``plan(cases)``; with ``reuse`` the runs that succeeded in ``out``'s CSV are
-    taken from it (an interrupted or partly failed study continues where it stopped)."""
+def sweep(cases: Sequence[Case], out: Path, timeout: float = 3600.0, echo=print, reuse: bool = False,
+          workers: int = 0, scheduler: Optional[str] = None) -> List[Run]:
+    """Every run of ``plan(cases)``, each a job of sweep/engine.py (its own process): one after
+    another here by default, since the study measures wall time (``workers``/``scheduler``: on
+    Dask, when the costs are not what is wanted); with ``reuse`` the runs that succeeded in
+    ``out``'s CSV are taken from it (an interrupted or partly failed study continues there)."""
+    from ..sweep.engine import run_jobs
+
     runs = plan(cases)
     earlier = read_rows(out / "accuracy.csv") if reuse else {}
-    echo(f"{len(runs)} runs, one process each -> {out}")
-    for k, run in enumerate(runs, 1):
-        tick = time.perf_counter()
+    todo = {}
+    for k, run in enumerate(runs):
         key = (run.case.name, run.axis, run.option)
-        run.row = earlier[key] if key in earlier else execute(run, timeout)
-        error = run.row.get("error", float("nan"))
-        echo(f"[{k}/{len(runs)}] {run.case.name:<28} {run.axis:<20} {run.option:<20} "
-             f"error {_pct(error):>9}  wall {run.row.get('wall_seconds', float('nan')):8.1f} s  "
-             f"({time.perf_counter() - tick:.0f} s total)  {run.row.get('note', '')}")
+        if key in earlier:
+            run.row = earlier[key]
+        else:
+            todo[job(run, k).id] = run
+    echo(f"{len(runs)} runs, one process each, {len(runs) - len(todo)} kept from {out / 'accuracy.csv'} -> {out}")
+
+    def report(done_job, result):
+        run = todo[done_job.id]
+        run.row = row_of(result)
+        echo(f"[{done_job.id}] {run.case.name:<28} {run.axis:<20} {run.option:<20} "
+             f"error {_pct(run.row.get('error', float('nan'))):>9}  wall {run.row.get('wall_seconds', float('nan')):8.1f} s"
+             f"  ({result.get('job_seconds', float('nan')):.0f} s total)  {run.row.get('note', '')}")
+
+    run_jobs([job(run, int(i)) for i, run in todo.items()], workers=workers, scheduler=scheduler, timeout=timeout,
+             on_result=report, quiet=True)
     return runs
 
 
 def study(cases: Sequence[Case], out: Path, title: str, timeout: float = 3600.0, readme: Optional[Path] = None,
-          echo=print, reuse: bool = False) -> Tuple[List[Run], Dict[str, Path]]:
+          echo=print, reuse: bool = False, workers: int = 0,
+          scheduler: Optional[str] = None) -> Tuple[List[Run], Dict[str, Path]]:
     """Run the sweep of ``cases`` (``reuse``: keep the successful runs of ``out``'s CSV), write
     the CSV, chart and tables into ``out``, and rewrite the study section of ``readme`` if given."""
-    runs = sweep(cases, out, timeout, echo, reuse)
+    runs = sweep(cases, out, timeout, echo, reuse, workers, scheduler)
     title += f" ({len(runs)} runs, {sum(r.row.get('wall_seconds', 0.0) for r in runs):.0f} s of stepping)"
     paths = write_outputs(runs, cases, out, title)
     if readme is not None and readme.exists() and update_readme(readme, paths["md"].read_text()):
@@ -518,7 +525,8 @@ def main(args) -> int:
     out = Path(args.out) if args.out else default
     whole = SOURCE_CHECKOUT and not args.quick and not args.cases and not args.no_readme
     runs, paths = study(cases, out, "Quick study" if args.quick else "Full study", args.timeout,
-                        REPO / "docs" / "accuracy.md" if whole else None, reuse=args.reuse)
+                        REPO / "docs" / "accuracy.md" if whole else None, reuse=args.reuse,
+                        workers=args.workers or 0, scheduler=args.scheduler)
     print(paths["md"].read_text())
     print("outputs: " + ", ".join(str(p) for p in paths.values() if p.exists()))
     return 0 if all(r.ok for r in runs) else 1

@@ -28,6 +28,9 @@ class MaterialParameters:
     obstacle_walls: ClassVar[str] = "dynamic"  # the boundary model obstacles are laid as
     numerics_read: ClassVar[FrozenSet[str]] = frozenset()  # model-specific numerics keys (config.MODEL_NUMERICS)
     symbols: ClassVar[Dict[str, str]] = {}  # the paper's symbol -> the key (an unknown key's suggestion)
+    # True where a deposit creeps below yield and never comes to rest (mu(I)'s regularised viscosity,
+    # [M48]): its run-out is read when the front stops, not at the end (validation/column_collapse.py)
+    deposit_creeps: ClassVar[bool] = False
 
     def check(self, path: str) -> None:
         """Relations between keys (each key's own range is checked by keys.check_numbers)."""

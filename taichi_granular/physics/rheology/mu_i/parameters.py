@@ -21,6 +21,7 @@ class MuIMaterial(MaterialParameters):
     obstacle_shapes: ClassVar[Tuple[str, ...]] = ("chute", "box", "post_rows", "cylinder", "wedge", "mesh")
     obstacle_walls: ClassVar[str] = "dynamic"  # the boundary model obstacles are laid as
     numerics_read: ClassVar[FrozenSet[str]] = frozenset({"implicit_viscosity"})
+    deposit_creeps: ClassVar[bool] = True  # the regularised viscosity [M48] is finite below yield
     symbols: ClassVar[Dict[str, str]] = {
         "mu_s": "static_friction_deg (the angle arctan(mu_s))", "mu_2": "limit_friction_deg (the angle arctan(mu_2))",
         "I_0": "reference_inertial_number", "i_0": "reference_inertial_number",
