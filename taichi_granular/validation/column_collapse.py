@@ -335,6 +335,24 @@ ACCEPTANCE = {
 }
 
 
+def markdown_rows(results: Sequence[CollapseResult], where: Sequence[tuple]) -> str:
+    """The family's rows as a Markdown table (runout.md beside runout.csv; the docs' tables are
+    copied from it): where = (resolution, cost) per result."""
+    def opt(t, fmt):
+        return "-" if t is None else format(t, fmt)
+
+    lines = ["| case | a | run-out | Lube | error | front stops | deposit height | peak front speed | creep after "
+             "(share of peak) | bulk at end | end | kinetic energy plateau | escaped / lost | resolution | cost |",
+             "|" + "---|" * 15]
+    for r, (res, run_cost) in zip(results, where):
+        lines.append(f"| {r.name} | {r.aspect_ratio:.2f} | {r.runout:.3f} | {r.runout_reference:.3f} | "
+                     f"{100 * r.error:+.1f} % | {opt(r.front_stop_time, '.2f')} s | {1e3 * r.deposit_height:.1f} mm | "
+                     f"{r.peak_front_speed:.2f} m/s | {1e3 * r.creep_speed:.2f} mm/s ({100 * r.creep_share:.2f} %) | "
+                     f"{r.bulk_runout_end:.3f} | {r.end_time:.2f} s{'' if r.time_to_rest is None else ' (at rest)'} | "
+                     f"{r.energy_plateau:.1e} | {r.escaped} / {r.lost} | {res} | {run_cost} |")
+    return "\n".join(lines) + "\n"
+
+
 # the paper's own figure for the validation table: none of the three tabulates its run-outs
 PAPER = {
     "column-collapse": "[M]: on Lube's line up to a = 3 (figure only)",
@@ -382,6 +400,7 @@ def check(case, runs, base, args) -> bool:
         values = {"case": r.name, "runout_lube": r.runout_reference, "error": r.error, "creep_share": r.creep_share}
         writer.writerow([_csv_value(values[c] if c in values else getattr(r, c)) for c in columns])
     atomic_write_text(base / "runout.csv", buf.getvalue())
+    atomic_write_text(base / "runout.md", markdown_rows(results, where))
     a = np.linspace(0.01, max(3.2, max(r.aspect_ratio for r in results) * 1.05), 200)
     image = plot_points_and_curve([(r.aspect_ratio, r.runout) for r in results],
                                   (a, np.array([lube_runout(x) for x in a])),
