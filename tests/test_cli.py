@@ -159,6 +159,7 @@ def test_every_validation_case_has_its_scenes_and_its_check():
 def test_validation_table_is_gathered_from_the_cases_tables(tmp_path):
     """Each validate check writes table.csv beside its runs; `reference validation` gathers them in
     the registry's order into one Markdown table (docs/validation/summary.md)."""
+    from taichi_granular.validation import CASES
     from taichi_granular.validation.table import (README_BEGIN, README_END, Row, gather, markdown,
                                                   update_readme, write_rows)
 
@@ -171,7 +172,8 @@ def test_validation_table_is_gathered_from_the_cases_tables(tmp_path):
     assert [r.case.split(":")[0] for r in rows] == ["inclined-plane", "drum"]
     text = markdown(tmp_path)
     assert "| inclined-plane: inclined_plane | velocity profile, relative L2 | 2.36 % |" in text
-    assert text.count("\n| ") == 3  # the header row and two cases
+    assert text.count("\n| ") == 3 + len(CASES) - 2  # the header row, two cases, the others not run
+    assert "| element-tests | " in text and "NOT RUN |" in text
     # a run kept elsewhere (a campaign's folder) joins the table, in the registry's order
     write_rows(tmp_path / "campaign" / "t3", [Row("column-collapse: collapse_a0_90", "run-out", "1.106 (-1.6 %)",
                                                   "-", "Lube et al. (2004): 1.124", "dp 3.02 mm", "-", "PASS")])
@@ -182,7 +184,7 @@ def test_validation_table_is_gathered_from_the_cases_tables(tmp_path):
     update_readme(readme, tmp_path)
     written = readme.read_text()
     assert "old table" not in written and written.startswith("# title") and written.endswith("\nafter\n")
-    assert written.count("\n| ") == 4 and "| column-collapse: collapse_a0_90 | run-out |" in written
+    assert written.count("\n| ") == 4 + len(CASES) - 3 and "| column-collapse: collapse_a0_90 | run-out |" in written
     # a sensitivity run's row says what it changed beyond dp and the viscous scheme
     from types import SimpleNamespace
     from taichi_granular.config import load_scene

@@ -104,9 +104,16 @@ README_END = "<!-- end of the validation table -->"
 
 
 def table(*roots: Path) -> str:
-    """The Markdown table of every row under ``roots``."""
+    """The Markdown table of every row under ``roots``; a registered case without any row is
+    listed as not run, so that the table names every case."""
+    from . import CASES
+
+    rows = gather(*roots)
+    seen = {row.case.split(":")[0] for row in rows}
+    missing = [Row(name, case.summary, "-", "-", "-", "-", "-", "NOT RUN") for name, case in CASES.items()
+               if name not in seen]
     lines = [TABLE_HEAD.rstrip("\n")]
-    for row in gather(*roots):
+    for row in rows + missing:
         lines.append("| " + " | ".join(str(v).replace("|", "\\|") for v in astuple(row)) + " |")
     return "\n".join(lines) + "\n"
 
