@@ -25,7 +25,8 @@ seconds (measured as the advance from that frame to each frame of the window), a
 again faster than SURGE_FRACTION of the peak (a pause followed by a second surge is no stop).
 r_inf is read there, as an experimentalist reads it; the creep speed afterwards (also as a
 share of the peak) and the kinetic-energy plateau (its median over the frames after the stop,
-over its peak) are reported beside it. A front that never stops so is read at the end.
+over its peak) are reported beside it. A deposit whose kinetic energy falls below REST_FRACTION of
+its peak has stopped then, if its front had not before; a front that never stops is read at the end.
 """
 from __future__ import annotations
 
@@ -287,6 +288,8 @@ def evaluate(scene: Scene, times: Sequence[float], frames: Sequence[Dict[str, np
     ke_times = np.array([d["t"] for d in diagnostics], float)
     rest = time_to_rest(ke_times, ke)
     stop = front_stop(times, mean, at_rest_at_end=rest is not None)
+    if stop is None and rest is not None:  # the deposit came to rest before its front's window closed
+        stop = int(np.searchsorted(np.asarray(times, float), rest - 1e-9))
     read = stop if stop is not None and not read_at_end else len(fronts) - 1
     t_end = float(times[-1])
     creep = (mean[-1] - mean[read]) / (t_end - times[read]) if t_end > times[read] else 0.0
