@@ -133,13 +133,19 @@ def test_sweep_on_a_local_cluster_survives_a_lost_worker_and_a_failed_run_then_r
         assert finished(runs / "p0001") is not None
 
 
-def test_sweep_command_runs_without_dask_one_point_after_another(tmp_path):
+def test_sampled_sweep_runs_without_dask_one_point_after_another(tmp_path):
+    """A Latin-hypercube sample of two points through the command, --workers 0 (no Dask): both
+    runs finish, the CSV has the sampled values, and the plots include the scatter matrix."""
     from taichi_granular.cli import main
 
     path = tmp_path / "sweep.yaml"
-    path.write_text(yaml.safe_dump({**TINY, "axes": {"numerics.cfl": [0.4]}, "out": str(tmp_path / "out")}))
+    sample = {"points": 2, "seed": 7, "ranges": {"numerics.cfl": [0.3, 0.5]}}
+    path.write_text(yaml.safe_dump({**TINY, "sample": sample, "out": str(tmp_path / "out")}))
     assert main(["sweep", str(path), "--workers", "0", "--quiet"]) == 0
     table = read_csv(tmp_path / "out" / "results.csv")
-    assert len(table) == 1 and table[0]["status"] == "ok" and float(table[0]["steps"]) > 0
+    assert [r["status"] for r in table] == ["ok", "ok"] and all(float(r["steps"]) > 0 for r in table)
+    cfl = sorted(float(r["numerics.cfl"]) for r in table)
+    assert 0.3 <= cfl[0] < 0.4 <= cfl[1] <= 0.5  # one point in each half of the range
+    assert (tmp_path / "out" / "plots" / "scatter_matrix.png").exists()
     path.write_text(yaml.safe_dump({**TINY, "axes": {"numerics.cfl": [0.4]}, "measures": ["speed"]}))
     assert main(["sweep", str(path), "--workers", "0"]) == 2  # the bad measure named, exit 2
