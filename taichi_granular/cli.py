@@ -220,6 +220,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--config", help="scene file (default: the bundled one)")
     p.add_argument("--out", help="output directory (default: output/validate/<case>)")
     p.add_argument("--reuse", action="store_true", help="evaluate existing output instead of running")
+    p.add_argument("--resume", action="store_true",
+                   help="continue a case whose run was interrupted from the checkpoint in its output folder (a "
+                        "finished one is reused, one never started runs), then evaluate")
     p.add_argument("--start", choices=["analytic", "rest"], default="analytic",
                    help="inclined plane: start from the [M56] profile (reaches the discrete steady state "
                         "in ~20 s) or from rest (~60 s, as [M] did)")

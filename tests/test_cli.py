@@ -198,3 +198,32 @@ def test_validation_table_is_gathered_from_the_cases_tables(tmp_path):
     readme.write_text("# no block\n")
     with pytest.raises(ValueError, match="no validation block"):
         update_readme(readme, tmp_path)
+
+
+def test_validate_resume_continues_an_interrupted_case_from_its_checkpoint(tmp_path):
+    """A case whose run stopped half-way (a checkpoint, no run.json) continues with `validate
+    --resume` and takes the same steps as the uninterrupted run (bit-exact resume); its cost
+    says it was resumed; a finished case is reused, not rerun."""
+    import json
+
+    from taichi_granular.config import load_scene
+    from taichi_granular.paths import config_path
+    from taichi_granular.simulation import Simulation
+
+    sets = ["numerics.particle_spacing=0.009", "numerics.viscosity=implicit", "run.end_time=0.1",
+            "run.output_interval=0.025"]
+    common = ["validate", "column-collapse", "--cases", "a0_90", "--quiet"] + [a for s in sets for a in ("--set", s)]
+    main(common + ["--out", str(tmp_path / "whole")])
+    whole = json.loads((tmp_path / "whole" / "collapse_a0_90" / "run.json").read_text())
+
+    scene = load_scene(config_path("mu_i/collapse_a0_90.yaml"), sets)
+    Simulation(scene, out_dir=tmp_path / "cut" / "collapse_a0_90", progress=False).run(end_time=0.05)
+    main(common + ["--out", str(tmp_path / "cut"), "--resume"])
+    cut = json.loads((tmp_path / "cut" / "collapse_a0_90" / "run.json").read_text())
+    assert cut["steps"] == whole["steps"] and 0 < cut["resumed_at_step"] < cut["steps"]
+    assert "resumed at step" in (tmp_path / "cut" / "table.csv").read_text()
+    fronts = [(tmp_path / d / "collapse_a0_90" / "fronts.csv").read_text() for d in ("whole", "cut")]
+    assert fronts[0] == fronts[1]
+    stamp = (tmp_path / "cut" / "collapse_a0_90" / "run.json").stat().st_mtime_ns
+    main(common + ["--out", str(tmp_path / "cut"), "--resume"])  # finished: reused
+    assert (tmp_path / "cut" / "collapse_a0_90" / "run.json").stat().st_mtime_ns == stamp

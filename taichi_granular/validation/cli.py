@@ -6,7 +6,7 @@ from ..config import load_scene
 from ..output import read_frame, read_series
 from ..paths import config_path
 from . import CASES
-from .table import record_run
+from .table import RUN_FILE, record_run
 
 
 def validate(args) -> int:
@@ -22,18 +22,27 @@ def validate(args) -> int:
     return 0 if module.check(case, _each_case(paths, base, args, prepare), base, args) else 1
 
 
-def _frames(scene, out: Path, reuse: bool, quiet: bool, prepare=None, overrides=()):
+def _frames(scene, out: Path, reuse: bool, quiet: bool, prepare=None, overrides=(), resume: bool = False):
     """Frames of ``scene`` in ``out``: run it first unless ``reuse``; ``prepare(sim)`` may set
-    the initial state before the run."""
+    the initial state before the run. With ``resume`` a run that was interrupted (a checkpoint but
+    no run.json) continues from its checkpoint, a finished one is reused, and one never started
+    runs."""
+    started = (Path(out) / "checkpoint.npz").exists()
+    if resume and (Path(out) / RUN_FILE).exists():
+        reuse = True
     if not reuse:
         from ..simulation import Simulation
         sim = Simulation(scene, out_dir=out, progress=not quiet)
-        if prepare is not None:
+        if resume and started:
+            sim.resume()
+            print(f"{scene.name}: resumed at t = {sim.t:.6g} s, step {sim.step_count}")
+        elif prepare is not None:
             prepare(sim)
         summary = sim.run()
         print(f"ran {scene.name}: {summary.steps} steps, {summary.wall_seconds:.1f} s wall, "
               f"{summary.particle_steps_per_second:.3g} particle-steps/s")
-        record_run(out, summary, sim.state.n_material, overrides)
+        record_run(out, summary, sim.state.n_material, overrides,
+                   resumed_at_step=sim.step_count - summary.steps if resume and started else None)
     series = read_series(out)
     return [t for t, _ in series], [read_frame(p) for _, p in series]
 
@@ -75,5 +84,6 @@ def _each_case(paths, base: Path, args, prepare=None):
     for path in paths:
         scene = load_scene(path, args.set)
         out = base / scene.name
-        times, frames = _frames(scene, out, args.reuse, args.quiet, prepare, args.set or ())
+        times, frames = _frames(scene, out, args.reuse, args.quiet, prepare, args.set or (),
+                                getattr(args, "resume", False))
         yield scene, out, times, frames

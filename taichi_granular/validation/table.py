@@ -28,12 +28,15 @@ class Row:
     verdict: str  # the case's acceptance: PASS or FAIL
 
 
-def record_run(out: Path, summary, n_material: int, overrides=()) -> None:
+def record_run(out: Path, summary, n_material: int, overrides=(), resumed_at_step=None) -> None:
     """Keep the run's cost, and the ``--set`` overrides it ran with, beside its frames (``--reuse``
-    reads them back)."""
-    atomic_write_text(Path(out) / RUN_FILE, json.dumps({
-        "steps": summary.steps, "wall_seconds": round(summary.wall_seconds, 1), "particles": n_material,
-        "particle_steps_per_second": summary.particle_steps_per_second, "set": list(overrides)}) + "\n")
+    reads them back). A run continued from its checkpoint (``resumed_at_step``) counts all its
+    steps but only the continued part's wall time, and says so."""
+    run = {"steps": summary.steps, "wall_seconds": round(summary.wall_seconds, 1), "particles": n_material,
+           "particle_steps_per_second": summary.particle_steps_per_second, "set": list(overrides)}
+    if resumed_at_step is not None:
+        run.update(steps=resumed_at_step + summary.steps, resumed_at_step=resumed_at_step)
+    atomic_write_text(Path(out) / RUN_FILE, json.dumps(run) + "\n")
 
 
 # overrides the resolution column already shows (dp, the viscous scheme)
@@ -60,6 +63,9 @@ def cost(out: Path) -> str:
     if not path.exists():
         return "-"
     run = json.loads(path.read_text())
+    if "resumed_at_step" in run:
+        return (f"{run['steps']} steps, {run['wall_seconds']:.0f} s for the last "
+                f"{run['steps'] - run['resumed_at_step']} (resumed at step {run['resumed_at_step']})")
     return f"{run['steps']} steps, {run['wall_seconds']:.0f} s"
 
 
