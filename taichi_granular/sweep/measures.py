@@ -29,8 +29,7 @@ REDUCERS: Dict[str, Callable[[np.ndarray], float]] = {
 def _collapse(scene, run) -> dict:
     from ..validation import column_collapse
 
-    result = column_collapse.evaluate(scene, run.times, run.frames, run.diagnostics,
-                                      read_at_end=column_collapse.reads_at_end(scene))
+    result = column_collapse.evaluate(scene, run.times, run.frames, run.diagnostics)  # read as validate reads it
     return {"runout": result.runout, "runout_error": result.error,
             "front_stop_time": math.nan if result.front_stop_time is None else result.front_stop_time,
             "deposit_height": result.deposit_height}
