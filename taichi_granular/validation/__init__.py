@@ -37,5 +37,5 @@ CASES = {case.name: case for case in (
                    "obstacle_flow", "elastoplastic", ("cylinder_coarse.yaml", "wedge_coarse.yaml")),
     ValidationCase("element-tests", "hypoplastic element tests and the annular shear cell of [P]", "element_tests"),
     ValidationCase("drum", "rotating drum of [P] at omega = 0.5, 1, 2 rad/s", "drum", "hypoplastic",
-                   ("drum_omega*.yaml",)),
+                   ("drum_omega*_coarse.yaml",)),
 )}

@@ -119,6 +119,21 @@ class BagnoldReference:
             (math.sin(alpha_i) - mu * math.cos(alpha_i))
         return math.sqrt(drive / resistance)
 
+    def slope_for_flux(self, flux: float, depth: float) -> float:
+        """The slope on which a steady layer of depth H carries the flux q (per unit width) over a
+        bed at rest: q = int_0^H u dz = (2/5) A H^(5/2), so A = 5 q / (2 H^(5/2)), and
+        sin theta - mu_h cos theta = sqrt(1 + mu_h^2) sin(theta - arctan mu_h) = A^2 k_v rho_s d^2
+        (sin alpha_i - mu_h cos alpha_i) / (rho g): the inverse of ``shear_rate_scale``  [rad]."""
+        m, mu = self.material, self.friction
+        alpha_i = math.radians(m.dispersion_angle_deg)
+        A = 2.5 * flux / depth**2.5
+        resistance = m.bagnold_coefficient * m.grain_density * m.grain_diameter**2 * \
+            (math.sin(alpha_i) - mu * math.cos(alpha_i))
+        excess = A * A * resistance / (self.density * self.g * math.sqrt(1.0 + mu * mu))
+        if not 0.0 <= excess < 1.0:
+            raise ValueError(f"no steady slope carries {flux:.3g} m2/s in a {depth:.3g} m layer")
+        return math.atan(mu) + math.asin(excess)
+
     def velocity(self, z, height: float) -> np.ndarray:
         z = np.clip(np.asarray(z, float), 0.0, height)
         return 2.0 / 3.0 * self.shear_rate_scale() * (height**1.5 - (height - z) ** 1.5)
