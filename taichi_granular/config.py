@@ -44,6 +44,8 @@ MODEL_NUMERICS = {
                           "the tensile instability correction needs a stress tensor model; set it to 0"),
     "stress_increment": (lambda n: n.stress_increment > 0.0, "numerics.stress_increment",
                          "it bounds the step by the hypoplastic stress rate"),
+    "residual_damping": (lambda n: n.residual_damping != 1.0, "numerics.residual_damping",
+                         "it scales the hypoplastic secant viscosity of the residual damping; leave it at 1"),
     "bulk_viscosity": (lambda n: n.bulk_viscosity > 0.0, "numerics.bulk_viscosity",
                        "it resists compaction in a model with no equation of state; set it to 0"),
     "stress_diffusion": (lambda n: n.stress_diffusion > 0.0, "numerics.stress_diffusion",

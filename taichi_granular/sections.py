@@ -163,6 +163,10 @@ class Numerics:
     stress_increment: float = scene_key(
         "largest relative change |dT_s/dt| dt / |T_s| of the frictional stress in one step, a time-step bound "
         "(hypoplastic model only; 0 = off; physics/rheology/hypoplastic/model.py)", 0.0, "-", bounds="[0, 10]")
+    residual_damping: float = scene_key(
+        "strength of the momentum equation's damping of the particle-scale velocity residual, as a fraction of the "
+        "secant viscosity |T*|/gamma_dot (hypoplastic model only; 1 = the full secant; "
+        "physics/rheology/hypoplastic/model.py)", 1.0, "-", bounds="(0, 1]")
     particle_shifting: ParticleShifting = scene_key("particle shifting against particle-scale disorder",
                                                     ParticleShifting())
     artificial_stress: ArtificialStress = scene_key("artificial stress against the tensile instability (models with "

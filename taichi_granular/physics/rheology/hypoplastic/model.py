@@ -85,6 +85,7 @@ class HypoplasticBagnold(Model):
         # from the scene's numerics (defaults: a bare law, as the point-integration tests use it)
         self.bulk_viscosity = float(numerics.bulk_viscosity) if numerics else 0.0  # alpha_b (module docstring)
         self.stress_increment = float(numerics.stress_increment) if numerics else 0.0  # stable_time_step
+        self.residual_damping = float(numerics.residual_damping) if numerics else 1.0  # secant_viscosity
         self.cfl = float(numerics.cfl) if numerics else 1.0  # the step's CFL factor, undone by alpha_b's own bound
         # Shepard sum below which a grain is on the free surface
         self.free_surface_threshold = float(numerics.particle_shifting.free_surface_threshold) if numerics else 0.9
@@ -185,19 +186,22 @@ class HypoplasticBagnold(Model):
 
     @ti.func
     def secant_viscosity(self, i, stress):
-        """eta = sqrt(T*:T*/2)/gamma_dot (tau/gamma_dot in simple shear), at most 0.1 rho c h (the
-        [M39] viscous bound then equals the step's h/c, so it never shortens dt): how strongly
+        """eta = f sqrt(T*:T*/2)/gamma_dot (f tau/gamma_dot in simple shear; f =
+        numerics.residual_damping, 1 by default), at most 0.1 rho c h (the [M39] viscous bound
+        then equals the step's h/c, so it never shortens dt): how strongly
         the momentum equation damps the particle-scale velocity residual (physics/momentum.py).
         Why: the SPH velocity gradient does not see a velocity alternating from one row of
         particles to the next, so the stress never resists it. Measured on the inclined plane
         (d 5 mm, 28 deg) without it: rows alternated by +-0.15 m/s about the profile by 0.2 s
         (velocity error 14 % per row, the averages of row pairs within a few % of the reference),
-        and the lattice broke up between 0.25 and 0.45 s  [Pa s]."""
+        and the lattice broke up between 0.25 and 0.45 s. The drum scenes take f = 0.25: with the
+        full secant the damping of the disordered flowing layer added to its friction and the
+        surface stuck and slipped (docs/models/hypoplastic.md, Drum)  [Pa s]."""
         deviator = stress - (stress.trace() / 3.0) * ti.Matrix.identity(float, 3)
         _, gamma = self.deviatoric_rate(self.embed(self.state.velocity_gradient[i]))
         cap = ti.static(0.1 * self.wave_speed * self.h) * self.state.density[i]
         eta = cap
-        tau = ti.sqrt(0.5 * (deviator * deviator).sum())
+        tau = ti.static(self.residual_damping) * ti.sqrt(0.5 * (deviator * deviator).sum())
         if tau < cap * gamma:
             eta = tau / gamma
         return eta

@@ -37,7 +37,7 @@ class HypoplasticMaterial(MaterialParameters):
     obstacle_shapes: ClassVar[Tuple[str, ...]] = ("drum", "chute", "box", "post_rows", "cylinder", "wedge", "mesh")
     obstacle_walls: ClassVar[str] = "extrapolated"  # [P]'s wall particles, extrapolated from the material
     numerics_read: ClassVar[FrozenSet[str]] = frozenset({"artificial_stress", "stress_diffusion", "stress_increment",
-                                                         "bulk_viscosity"})
+                                                         "bulk_viscosity", "residual_damping"})
 
     model: Literal["hypoplastic"] = scene_key("constitutive model")
     parameter_set: Optional[Literal["set1", "set2", "annular"]] = scene_key(
