@@ -84,10 +84,15 @@ def test_drum_window_is_the_last_revolution_and_a_loose_start_is_transient():
     r = drum.evaluate_drum(scene, times, frames)
     assert r.inclination_spread_deg < 0.3 and not r.loose_start
     loose = load_scene(config_path("hypoplastic/drum_omega1.yaml"), ["material.initial_void_ratio=1.1"])
-    r = drum.evaluate_drum(loose, times, frames)
-    assert r.loose_start
-    lowest, when, settled = r.transient()
-    assert lowest == pytest.approx(12.0, abs=0.5) and when == pytest.approx(times[3]) and settled == pytest.approx(times[6])
+    compacting = []
+    for k, f in enumerate(frames):  # the mean void ratio falls from 1.1 to 0.9 over the first 8 frames
+        e = max(1.1 - 0.025 * k, 0.9)
+        compacting.append(dict(f, mass=np.ones(len(f["position"])), density=np.full(len(f["position"]), 2650.0 / (1 + e))))
+    r = drum.evaluate_drum(loose, times, compacting)
+    assert r.loose_start and r.void_ratio == pytest.approx(0.9)
+    settled, lowest, highest = r.transient()
+    assert settled == pytest.approx(times[8]) and lowest == pytest.approx(12.0, abs=0.5)
+    assert highest == pytest.approx(26.5, abs=0.5)
 
 
 def test_coarse_drum_rolls_continuously_and_keeps_its_grains():

@@ -39,6 +39,7 @@ INCLINATION_TOLERANCE_DEG = 1.5  # mean inclination against the model's steady p
 STEADY_SPREAD_DEG = 2.0  # standard deviation of the inclination over the window: continuous rolling
 RIGID_TOLERANCE = 0.05  # the bed's departure from rigid rotation, of omega R
 TRANSIENT_VOID_RATIO = 0.05  # a fill started this much looser than e* is a loose start: its angles are transient
+SETTLED_VOID_RATIO = 0.01  # a loose start has compacted once its mean void ratio is this close to e*
 PAPER_OUT_OF_REACH = ("[P]'s inclinations lie below arctan(mu_h), the lowest slope on which this law flows "
                       "steadily; they need I_e = 1.21 / 1.14 / 0.99, states that lose their frictional stress "
                       "within 1-3 % shear strain (MODEL.md section 2, Reachability): reported, not judged")
@@ -67,6 +68,7 @@ class DrumResult:
     rigid_velocity: np.ndarray = field(repr=False, default=None)
     times: List[float] = field(default_factory=list)
     inclinations: List[float] = field(default_factory=list)  # every frame of the run, deg
+    void_ratios: List[float] = field(default_factory=list)  # every frame: the material's mean (volume-weighted)
 
     @property
     def paper(self):
@@ -82,13 +84,13 @@ class DrumResult:
         return self.initial_void_ratio > self.critical_void_ratio + TRANSIENT_VOID_RATIO
 
     def transient(self):
-        """(lowest inclination, its time, the time the inclination first comes within the steady
-        spread of the window's mean) of a loose start  [deg, s, s]."""
-        t, inc = np.asarray(self.times), np.asarray(self.inclinations)
-        k = int(np.nanargmin(inc))
-        near = np.where(np.abs(inc - self.inclination_deg) <= max(self.inclination_spread_deg, 1.0))[0]
-        settled = float(t[near[near >= k][0]]) if np.any(near >= k) else math.nan
-        return float(inc[k]), float(t[k]), settled
+        """(time the fill's mean void ratio first comes within ``SETTLED_VOID_RATIO`` of e*, and the
+        lowest and highest inclination after the start up to then) of a loose start  [s, deg, deg]."""
+        t, inc, e = np.asarray(self.times), np.asarray(self.inclinations), np.asarray(self.void_ratios)
+        settled = np.where(e <= self.critical_void_ratio + SETTLED_VOID_RATIO)[0]
+        end = settled[0] if len(settled) else len(t) - 1
+        span = inc[1:end + 1] if end >= 1 else inc[:1]
+        return float(t[end]), float(np.nanmin(span)), float(np.nanmax(span))
 
     def passed(self) -> bool:
         """Continuous rolling, a rigid bed, the mean inclination at the model's steady prediction."""
@@ -203,6 +205,7 @@ def evaluate_drum(scene, times, frames) -> DrumResult:
     window = steady_window(times, omega)
     depth_bins = np.arange(0.0, 2.0 * radius + dp, dp)
     every = [surface_inclination(f, centre, radius, dp) for f in frames]
+    every_e = [mean_void_ratio(f, scene.material.grain_density) for f in frames]
     profiles, rigids, areas, void_ratios = [], [], [], []
     for k in window:
         f = frames[k]
@@ -213,10 +216,8 @@ def evaluate_drum(scene, times, frames) -> DrumResult:
         profiles.append(u)
         rigids.append(rigid)
         if "mass" in f and "density" in f:
-            volume = f["mass"][:n] / f["density"][:n]
-            areas.append(float(np.sum(volume)))
-            void_ratios.append(float(np.sum(volume * (scene.material.grain_density / f["density"][:n] - 1.0))
-                                     / np.sum(volume)))
+            areas.append(float(np.sum(f["mass"][:n] / f["density"][:n])))
+            void_ratios.append(every_e[k])
         else:  # synthetic frames: one dp^2 per grain
             areas.append(n * dp * dp)
     profiles, rigids = np.array(profiles), np.array(rigids)
@@ -241,7 +242,17 @@ def evaluate_drum(scene, times, frames) -> DrumResult:
                       flowing_depth, flux, 0.5 * abs(omega) * (radius**2 - (radius - H0) ** 2), H0, departure,
                       predicted, (float(times[window[0]]), float(times[-1])),
                       float(np.mean(void_ratios)) if void_ratios else math.nan, critical_void_ratio(scene),
-                      scene.material.initial_void_ratio, len(window), depth, u, rigid, list(map(float, times)), every)
+                      scene.material.initial_void_ratio, len(window), depth, u, rigid, list(map(float, times)), every,
+                      every_e)
+
+
+def mean_void_ratio(frame, grain_density: float) -> float:
+    """The material's volume-weighted mean void ratio, NaN for frames without density  [-]."""
+    if "mass" not in frame or "density" not in frame:
+        return math.nan
+    n = _material_count(frame)
+    volume = frame["mass"][:n] / frame["density"][:n]
+    return float(np.sum(volume * (grain_density / frame["density"][:n] - 1.0)) / np.sum(volume))
 
 
 def _material_count(frame) -> int:
@@ -310,10 +321,10 @@ def check(case, runs, base, args) -> bool:
             write_png(out / "revolution.png", strip)
         print(result.row(), flush=True)
         if result.loose_start:
-            low, when, settled = result.transient()
+            settled, low, high = result.transient()
             print(f"  loose start (e_0 {result.initial_void_ratio:.3f} against e* {result.critical_void_ratio:.3f}): "
-                  f"transient inclination down to {low:.1f} deg at {when:.2f} s, within the steady spread from "
-                  f"{settled:.2f} s (transient, not a steady state)")
+                  f"compacted to within {SETTLED_VOID_RATIO} of e* by {settled:.2f} s, the inclination "
+                  f"{low:.1f}-{high:.1f} deg until then (transient, not judged)")
     print(f"steady window: the last revolution (at most the second half of the run); model: the steady slope of "
           f"MODEL.md section 2 at the measured flux and depth; kinematic flux omega (R^2 - (R - H_0)^2)/2; "
           f"[P]: Peng et al. (2016) -- {PAPER_OUT_OF_REACH}")
