@@ -62,6 +62,7 @@ class DrumResult:
     void_ratio: float  # mean over the material and the window
     critical_void_ratio: float  # e* of the stationary state at zero pressure
     initial_void_ratio: float
+    froude: float  # omega^2 R / g
     frames: int
     depth: np.ndarray = field(repr=False, default=None)
     velocity: np.ndarray = field(repr=False, default=None)
@@ -73,11 +74,6 @@ class DrumResult:
     @property
     def paper(self):
         return PAPER.get(round(self.omega, 6))
-
-    @property
-    def froude(self) -> float:
-        """omega^2 R / g  [-]."""
-        return self.omega**2 * self.radius / 9.81
 
     @property
     def loose_start(self) -> bool:
@@ -242,7 +238,8 @@ def evaluate_drum(scene, times, frames) -> DrumResult:
                       flowing_depth, flux, 0.5 * abs(omega) * (radius**2 - (radius - H0) ** 2), H0, departure,
                       predicted, (float(times[window[0]]), float(times[-1])),
                       float(np.mean(void_ratios)) if void_ratios else math.nan, critical_void_ratio(scene),
-                      scene.material.initial_void_ratio, len(window), depth, u, rigid, list(map(float, times)), every,
+                      scene.material.initial_void_ratio, omega**2 * radius / scene.gravity.magnitude, len(window),
+                      depth, u, rigid, list(map(float, times)), every,
                       every_e)
 
 
