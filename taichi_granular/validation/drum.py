@@ -184,7 +184,7 @@ def steady_window(times, omega: float):
 
 def surface_inclination(frame, centre, radius, spacing) -> float:
     """The inclination of the free surface in one frame, NaN where too few grains span the middle  [deg]."""
-    n = int(np.sum(frame["is_wall"] == 0)) if "is_wall" in frame else len(frame["position"])
+    n = _material_count(frame)
     try:
         slope, _ = surface_line(frame["position"][:n, :2], centre, radius, spacing)
     except ValueError:
@@ -202,10 +202,10 @@ def evaluate_drum(scene, times, frames) -> DrumResult:
     depth_bins = np.arange(0.0, 2.0 * radius + dp, dp)
     every = [surface_inclination(f, centre, radius, dp) for f in frames]
     every_e = [mean_void_ratio(f, scene.material.grain_density) for f in frames]
-    profiles, rigids, areas, void_ratios = [], [], [], []
+    profiles, rigids, areas = [], [], []
     for k in window:
         f = frames[k]
-        n = int(np.sum(f["is_wall"] == 0)) if "is_wall" in f else len(f["position"])
+        n = _material_count(f)
         x, v = f["position"][:n, :2], f["velocity"][:n, :2]
         slope, intercept = surface_line(x, centre, radius, dp)
         u, rigid = cross_section(x, v, centre, omega, slope, intercept, dp, depth_bins)
@@ -213,7 +213,6 @@ def evaluate_drum(scene, times, frames) -> DrumResult:
         rigids.append(rigid)
         if "mass" in f and "density" in f:
             areas.append(float(np.sum(f["mass"][:n] / f["density"][:n])))
-            void_ratios.append(every_e[k])
         else:  # synthetic frames: one dp^2 per grain
             areas.append(n * dp * dp)
     profiles, rigids = np.array(profiles), np.array(rigids)
@@ -228,16 +227,17 @@ def evaluate_drum(scene, times, frames) -> DrumResult:
     bed = depth > flowing_depth + 2.0 * dp
     departure = float(np.max(np.abs(u[bed] - rigid[bed])) / (abs(omega) * radius)) if np.any(bed) else math.nan
     H0 = fill_depth(float(np.mean(areas)), radius)
-    inclinations = np.array(every)[window]
+    inclinations, void_ratios = np.array(every)[window], np.array(every_e)[window]
+    has_density = not np.all(np.isnan(void_ratios))
     try:
-        predicted = math.degrees(BagnoldReference(scene, [frames[k] for k in window] if void_ratios else None,
+        predicted = math.degrees(BagnoldReference(scene, [frames[k] for k in window] if has_density else None,
                                                   _material_count(frames[window[0]])).slope_for_flux(flux, flowing_depth))
     except ValueError:
         predicted = math.nan
     return DrumResult(scene.name, abs(omega), radius, float(np.nanmean(inclinations)), float(np.nanstd(inclinations)),
                       flowing_depth, flux, 0.5 * abs(omega) * (radius**2 - (radius - H0) ** 2), H0, departure,
                       predicted, (float(times[window[0]]), float(times[-1])),
-                      float(np.mean(void_ratios)) if void_ratios else math.nan, critical_void_ratio(scene),
+                      float(np.mean(void_ratios)) if has_density else math.nan, critical_void_ratio(scene),
                       scene.material.initial_void_ratio, omega**2 * radius / scene.gravity.magnitude, len(window),
                       depth, u, rigid, list(map(float, times)), every,
                       every_e)
