@@ -71,7 +71,7 @@ def test_viscous_operator_is_negative_semidefinite(momentum, correction):
         assert asymmetry < 1e-12
     else:
         assert asymmetry > 1e-3, asymmetry  # why the solver is BiCGSTAB (module docstring)
-    # the real parts of L's eigenvalues are <= 0: backward Euler damps every mode
+    # the real parts of L's eigenvalues are <= 0: the theta-method (theta > 1/2) damps every mode
     assert np.linalg.eigvals(L).real.max() <= 1e-9 * np.abs(L).max()
 
 

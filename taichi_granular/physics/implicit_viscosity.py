@@ -43,7 +43,7 @@ theta = 1/2 (never decays: hence theta > 1/2). v(n+1) = v* + dt L y keeps the up
 pair terms (momentum conserved, below).
 
 The solve is matrix-free over the neighbour lists: BiCGSTAB (van der Vorst 1992) with right
-block-Jacobi preconditioning by the d x d diagonal blocks of I - dt L_[M27] (exact for the pair
+block-Jacobi preconditioning by the d x d diagonal blocks of I - theta dt L_[M27] (exact for the pair
 form, an approximation for the stress form). Why BiCGSTAB and not the conjugate gradient of
 Weiler et al. (2018): the stress form's L, built from the corrected (non-symmetric) SPH
 gradient, is negative definite but not symmetric (tests/test_implicit_viscosity.py measures
@@ -75,7 +75,7 @@ class ViscousSolveError(RuntimeError):
 class ImplicitViscosity(Stage):
     name = "implicit_viscosity"
     category = "forces"
-    equation = "(I - dt L) v = v*, BiCGSTAB"
+    equation = "(I - theta dt L) y = theta v* + (1 - theta) v(n), v = v* + dt L y, BiCGSTAB"
     fields = (FieldSpec("viscous_acceleration", "vector",
                         "dv/dt of the implicit viscous update in the last step (its warm start)", "m/s^2",
                         "material"),)
@@ -147,7 +147,7 @@ class ImplicitViscosity(Stage):
 
     @ti.kernel
     def _first_residual(self, dt: float):
-        """r = v* - (I - dt L) x; the shadow residual r^ = r; p = v = 0."""
+        """r = target - (I - dt L) x (dt: the solve's theta dt); the shadow residual r^ = r; p = v = 0."""
         ti.loop_config(serialize=runtime.serial_loops)
         for i in range(self.state.n_material):
             r = self.target[i] - (self.state.velocity[i] - dt * self.momentum.image[i])
@@ -167,7 +167,7 @@ class ImplicitViscosity(Stage):
 
     @ti.kernel
     def _system_image(self, dt: float, out: ti.template()):
-        """out = (I - dt L) operand, with image = L operand."""
+        """out = (I - dt L) operand (dt: the solve's theta dt), with image = L operand."""
         ti.loop_config(serialize=runtime.serial_loops)
         for i in range(self.state.n_material):
             out[i] = self.momentum.operand[i] - dt * self.momentum.image[i]
@@ -203,7 +203,8 @@ class ImplicitViscosity(Stage):
         launcher(self, "_system_image", out)(dt)
 
     def run(self) -> None:
-        """Solve (I - dt L) v = v* in place of the velocities (v* on entry); with Picard iterations,
+        """Solve (I - theta dt L) y = theta v* + (1 - theta) v(n) and set v = v* + dt L y in place of the
+        velocities (v* on entry); with Picard iterations,
         re-evaluate the viscosity at the mid-step velocity after each solve but the last and solve
         again from the same v*, starting from the last solution."""
         self.steps += 1
