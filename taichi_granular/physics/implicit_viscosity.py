@@ -33,9 +33,10 @@ excess viscosity makes lambda dt ~ 1 (lambda the rate at which L relaxes it): th
 are starting to yield. Measured on the coarse a = 2.75 collapse (dp 14.58 mm) without particle
 shifting, where the explicit run is deterministic: the front at 0.08 s is 1.7 / 0.9 / 0.3 / 0.2 mm
 behind the explicit one at cfl 0.5 / 0.25 / 0.1 / 0.05 with backward Euler (linear in dt), and
-within 0.3 mm at cfl 0.5 with theta = 0.6 or 0.52; over twenty runs with shifting the front
-stopped 13 % earlier than the explicit one with backward Euler, 3.6 % with theta = 0.6
-(docs/validation/column_collapse.md). Picard iterations on eta did not move it (the lag is
+within 0.3 mm at cfl 0.5 with theta = 0.6 or 0.52; over forty runs with shifting the front
+stopped 13.9 % earlier than the explicit one with backward Euler, 7.8 % with theta = 0.6 (at the
+coarsest spacing of the study, 19.44 mm, theta = 0.6 reads the run-out at the stop 6 points
+ahead of the explicit one, backward Euler 1.6: docs/validation/column_collapse.md). Picard iterations on eta did not move it (the lag is
 not the error). The first-order error of the theta-method is (2 theta - 1) times backward
 Euler's; a stiff mode (lambda dt >> 1: grains far below yield) is multiplied by
 -(1 - theta)/theta each step, -0.67 at 0.6 (decays, alternating), -1 at the trapezoidal rule
