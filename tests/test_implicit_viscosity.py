@@ -88,11 +88,13 @@ def channel(momentum, n_rows=10, **numerics):
     return build(data), height
 
 
-def channel_start_up(theta, dt_factor, steps, eta=2.0, g=5.0):
-    """The channel's velocities after ``steps`` steps of dt = dt_factor x the explicit limit
-    0.1 rho h^2/eta of [M39], started from rest under a body force g along x, the whole constant
-    viscosity eta in the solve with numerics.viscous_theta = theta  [m/s]."""
-    scene, _ = channel("stress_divergence", viscous_theta=theta)
+def spin_channel(momentum, dt_factor, steps, eta=2.0, g=5.0, **numerics):
+    """The channel started from rest under a body force g along x [m/s^2], its whole constant
+    viscosity eta [Pa s] in the solve, stepped ``steps`` times with dt = dt_factor x the explicit
+    limit 0.1 rho h^2/eta of [M39] as the integrator steps it (v(n) kept, kick v* = v + dt g,
+    solve). Returns (the material's steady parabola g rho/(2 eta) y (H - y) [m/s], its velocities
+    [m/s], each step's largest speed [m/s])."""
+    scene, height = channel(momentum, **numerics)
     sim = Simulation(scene)
     scheme, state = sim.scheme, sim.state
     n = state.n_material
@@ -100,18 +102,22 @@ def channel_start_up(theta, dt_factor, steps, eta=2.0, g=5.0):
     rho = state.density.to_numpy()[:n]
     dt = dt_factor * 0.1 * rho.min() * scene.numerics.smoothing_length**2 / eta
     solve = scheme.viscous_solve
-    solve.momentum.cap_factor = 0.0
+    solve.momentum.cap_factor = 0.0  # the whole viscosity in the solve (before its kernels compile)
+    y = state.position.to_numpy()[:n, 1]
+    expected = g * rho.mean() / (2 * eta) * y * (height - y)
     velocity = np.zeros((state.n_total, 2))
+    peaks = []
     for _ in range(steps):
         state.viscosity.from_numpy(np.full(n, eta))
         state.velocity_gradient.from_numpy(np.zeros((n, 2, 2)))
-        state.velocity_start.from_numpy(velocity[:n])
-        velocity[:n, 0] += dt * g
+        state.velocity_start.from_numpy(velocity[:n])  # v(n), which the theta-method weighs in
+        velocity[:n, 0] += dt * g  # the explicit kick: v* = v + dt g
         state.velocity.from_numpy(velocity)
         scheme.dt[None] = dt
         solve.run()
         velocity = state.velocity.to_numpy()
-    return velocity[:n, 0]
+        peaks.append(np.abs(velocity[:n]).max())
+    return expected, velocity[:n], peaks
 
 
 def test_theta_method_is_closer_to_the_transient_than_backward_euler():
@@ -121,10 +127,10 @@ def test_theta_method_is_closer_to_the_transient_than_backward_euler():
     and theta = 0.6 at most (2 theta - 1) = 1/5 of it (measured: 2.8 % and 0.26 % of the peak;
     the reference is within 0.09 % of one at a quarter of its step), while the stiff modes stay
     damped (no velocity above the fine run's peak)."""
-    reference = channel_start_up(1.0, 1.0, 200)
+    reference = spin_channel("stress_divergence", 1.0, 200, viscous_theta=1.0)[1][:, 0]
     errors = {}
     for theta in (1.0, 0.6):
-        u = channel_start_up(theta, 25.0, 8)
+        u = spin_channel("stress_divergence", 25.0, 8, viscous_theta=theta)[1][:, 0]
         assert u.max() <= 1.001 * reference.max() and np.all(np.isfinite(u))
         errors[theta] = np.abs(u - reference).max() / reference.max()
     assert errors[1.0] > 0.02, errors  # backward Euler's lag is real at this step ...
@@ -139,33 +145,8 @@ def test_poiseuille_channel_at_a_hundred_times_the_explicit_step(momentum):
     peak with the stress form (measured 2.2 %: exact for quadratic fields in the bulk, the ghost rows give the rest), within the [M27]
     operator's known deficit (it returns ~80 % of eta lap v at h/dp = 1.3: the profile comes out
     ~25 % faster, tests/test_operators.py) with the pair form."""
-    scene, height = channel(momentum)
-    sim = Simulation(scene)
-    scheme, state = sim.scheme, sim.state
-    n = state.n_material
-    eta, g = 2.0, 5.0  # Pa s, m/s^2
-    scheme.evaluate_rates()
-    rho = state.density.to_numpy()[:n]
-    h = scene.numerics.smoothing_length
-    dt = 100 * 0.1 * rho.min() * h**2 / eta
-    solve = scheme.viscous_solve
-    solve.momentum.cap_factor = 0.0  # the whole viscosity in the solve (before its kernels compile)
-    y = state.position.to_numpy()[:n, 1]
-    expected = g * rho.mean() / (2 * eta) * y * (height - y)
-    velocity = np.zeros((state.n_total, 2))
-    zero_gradient = np.zeros((state.n_material, 2, 2))
-    peaks = []
-    for step in range(60):
-        state.viscosity.from_numpy(np.full(n, eta))
-        state.velocity_gradient.from_numpy(zero_gradient)
-        state.velocity_start.from_numpy(velocity[:n])  # v(n), which the theta-method weighs in
-        velocity[:n, 0] += dt * g  # the explicit kick: v* = v + dt g
-        state.velocity.from_numpy(velocity)
-        scheme.dt[None] = dt
-        solve.run()
-        velocity = state.velocity.to_numpy()
-        peaks.append(np.abs(velocity[:n]).max())
-    u = velocity[:n, 0]
+    expected, velocity, peaks = spin_channel(momentum, 100.0, 60)
+    u = velocity[:, 0]
     assert np.all(np.isfinite(velocity))
     assert max(peaks) < 2.0 * expected.max()  # no overshoot, no growth
     assert abs(peaks[-1] - peaks[-2]) < 1e-3 * peaks[-1]  # steady, to the solve's tolerance
@@ -174,7 +155,7 @@ def test_poiseuille_channel_at_a_hundred_times_the_explicit_step(momentum):
         assert error < 0.03, error
     else:
         assert 0.1 < np.mean(u) / np.mean(expected) - 1.0 < 0.4, np.mean(u) / np.mean(expected)
-    assert np.abs(velocity[:n, 1]).max() < 1e-3 * expected.max()  # the solve's tolerance
+    assert np.abs(velocity[:, 1]).max() < 1e-3 * expected.max()  # the solve's tolerance
 
 
 def small_collapse(viscosity):

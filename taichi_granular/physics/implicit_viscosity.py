@@ -36,16 +36,16 @@ behind the explicit one at cfl 0.5 / 0.25 / 0.1 / 0.05 with backward Euler (line
 within 0.3 mm at cfl 0.5 with theta = 0.6 or 0.52; over forty runs with shifting the front
 stopped 13.9 % earlier than the explicit one with backward Euler, 7.8 % with theta = 0.6 (at the
 coarsest spacing of the study, 19.44 mm, theta = 0.6 reads the run-out at the stop 6 points
-ahead of the explicit one, backward Euler 1.6: docs/validation/column_collapse.md). Picard iterations on eta did not move it (the lag is
-not the error). The first-order error of the theta-method is (2 theta - 1) times backward
+ahead of the explicit one, backward Euler 1.6: docs/validation/column_collapse.md). Picard
+iterations on eta did not move it (the lag is not the error). The first-order error of the theta-method is (2 theta - 1) times backward
 Euler's; a stiff mode (lambda dt >> 1: grains far below yield) is multiplied by
 -(1 - theta)/theta each step, -0.67 at 0.6 (decays, alternating), -1 at the trapezoidal rule
 theta = 1/2 (never decays: hence theta > 1/2). v(n+1) = v* + dt L y keeps the update a sum of
 pair terms (momentum conserved, below).
 
 The solve is matrix-free over the neighbour lists: BiCGSTAB (van der Vorst 1992) with right
-block-Jacobi preconditioning by the d x d diagonal blocks of I - theta dt L_[M27] (exact for the pair
-form, an approximation for the stress form). Why BiCGSTAB and not the conjugate gradient of
+block-Jacobi preconditioning by the d x d diagonal blocks of I - theta dt L_[M27] (exact for the
+pair form, an approximation for the stress form). Why BiCGSTAB and not the conjugate gradient of
 Weiler et al. (2018): the stress form's L, built from the corrected (non-symmetric) SPH
 gradient, is negative definite but not symmetric (tests/test_implicit_viscosity.py measures
 both), and CG needs symmetry. The start is v* plus the previous step's viscous change (in a
