@@ -38,9 +38,9 @@ stopped 13.9 % earlier than the explicit one with backward Euler, 7.8 % with the
 coarsest spacing of the study, 19.44 mm, theta = 0.6 reads the run-out at the stop 6 points
 ahead of the explicit one, backward Euler 1.6: docs/validation/column_collapse.md). Picard
 iterations on eta did not move it (the lag is not the error). The first-order error of the
-theta-method is (2 theta - 1) times backward Euler's; a stiff mode (lambda dt >> 1: grains far below yield) is multiplied by
--(1 - theta)/theta each step, -0.67 at 0.6 (decays, alternating), -1 at the trapezoidal rule
-theta = 1/2 (never decays: hence theta > 1/2). v(n+1) = v* + dt L y keeps the update a sum of
+theta-method is (2 theta - 1) times backward Euler's; a stiff mode (lambda dt >> 1: grains far
+below yield) is multiplied by -(1 - theta)/theta each step, -0.67 at 0.6 (decays, alternating),
+-1 at the trapezoidal rule theta = 1/2 (never decays: hence theta > 1/2). v(n+1) = v* + dt L y keeps the update a sum of
 pair terms (momentum conserved, below).
 
 The solve is matrix-free over the neighbour lists: BiCGSTAB (van der Vorst 1992) with right
