@@ -40,8 +40,8 @@ ahead of the explicit one, backward Euler 1.6: docs/validation/column_collapse.m
 iterations on eta did not move it (the lag is not the error). The first-order error of the
 theta-method is (2 theta - 1) times backward Euler's; a stiff mode (lambda dt >> 1: grains far
 below yield) is multiplied by -(1 - theta)/theta each step, -0.67 at 0.6 (decays, alternating),
--1 at the trapezoidal rule theta = 1/2 (never decays: hence theta > 1/2). v(n+1) = v* + dt L y keeps the update a sum of
-pair terms (momentum conserved, below).
+-1 at the trapezoidal rule theta = 1/2 (never decays: hence theta > 1/2). v(n+1) = v* + dt L y
+keeps the update a sum of pair terms (momentum conserved, below).
 
 The solve is matrix-free over the neighbour lists: BiCGSTAB (van der Vorst 1992) with right
 block-Jacobi preconditioning by the d x d diagonal blocks of I - theta dt L_[M27] (exact for the
