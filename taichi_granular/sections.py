@@ -139,6 +139,11 @@ class Numerics:
         "implicit viscosity: solves per step; after each but the last the strain rate and the viscosity are "
         "re-evaluated at the mid-step velocity (v(n) + v(n+1))/2 (Picard iteration on eta, which one solve "
         "lags by half a step)", 1, bounds="[1, 20]")
+    viscous_scheme: Literal["theta", "tr_bdf2"] = scene_key(
+        "implicit viscosity: the time integration of the viscous term: theta (the theta-method, "
+        "numerics.viscous_theta, one solve a step) or tr_bdf2 (a trapezoidal stage and a BDF2 stage, two solves "
+        "a step of the same matrix: second order like theta = 1/2 and damping the stiff modes fully like "
+        "backward Euler; physics/implicit_viscosity.py)", "theta")
     viscous_theta: float = scene_key(
         "implicit viscosity: the weight of the new velocity in the viscous update, v(n+1) = v* + dt L (theta v(n+1) + "
         "(1 - theta) v(n)); 1 is backward Euler (first order: at the acoustic step the a = 2.75 collapse's front "

@@ -67,6 +67,13 @@ from .stage import Stage
 
 DOT_BLOCK = 256  # particles per partial sum of a dot product
 
+# TR-BDF2 (Bank et al. 1985; Hosea & Shampine 1996): a trapezoidal stage to t + GAMMA dt, then
+# BDF2 through t(n), t + GAMMA dt, t + dt. GAMMA = 2 - sqrt(2) makes both stages' matrices
+# I - (GAMMA/2) dt L, and the method L-stable and second order.
+GAMMA = 2.0 - 2.0 ** 0.5
+BDF2_STAGE = 1.0 / (2.0 - GAMMA)  # weight of L y1 (the trapezoidal stage's image) in v(n+1) - v*, per dt
+BDF2_NEW = (1.0 - GAMMA) / (2.0 - GAMMA)  # weight of L v(n+1) in it (= GAMMA/2)
+
 
 class ViscousSolveError(RuntimeError):
     """The implicit viscous solve did not converge (the message gives residual and iterations)."""
@@ -93,9 +100,12 @@ class ImplicitViscosity(Stage):
         dim, n = ctx.state.dim, ctx.state.n_material
         self.dim = dim
         self.theta = ctx.numerics.viscous_theta
-        # v_star: v* of the step; target: the solve's right-hand side theta v* + (1 - theta) v(n)
+        self.tr_bdf2 = ctx.numerics.viscous_scheme == "tr_bdf2"
+        # v_star: v* of the step; target: the solve's right-hand side (theta: theta v* + (1 - theta) v(n))
         self.v_star, self.target, self.residual, self.shadow, self.direction, self.v, self.t = (
             ti.Vector.field(dim, float, n) for _ in range(7))
+        # TR-BDF2: L y1 of the trapezoidal stage, which the BDF2 stage and the update weigh in
+        self.stage_image = ti.Vector.field(dim, float, n) if self.tr_bdf2 else None
         self.kept = ti.Vector.field(dim, float, n) if self.picard_iterations > 1 else None  # last solution
         self.preconditioner = ti.Matrix.field(dim, dim, float, n)
         self.n_blocks = max(1, -(-n // DOT_BLOCK))
@@ -131,15 +141,22 @@ class ImplicitViscosity(Stage):
         return self.total[None]
 
     @ti.kernel
-    def _begin(self, dt: float):
-        """v_star = v*; target = theta v* + (1 - theta) v(n); x = target + theta dt a_viscous(previous
-        step) (``dt`` here is theta dt); operand = x; preconditioner."""
+    def _take_star(self):
+        """v_star = v*, the velocities after the explicit kick."""
         ti.loop_config(serialize=runtime.serial_loops)
         for i in range(self.state.n_material):
             self.v_star[i] = self.state.velocity[i]
-            target = self.state.velocity[i]
-            if ti.static(self.theta != 1.0):
-                target = self.theta * self.state.velocity[i] + (1.0 - self.theta) * self.state.velocity_start[i]
+
+    @ti.kernel
+    def _begin(self, dt: float, start_weight: float, stage_weight: float):
+        """target = (1 - start_weight) v* + start_weight v(n) [+ stage_weight L y1 (TR-BDF2)];
+        x = target + dt a_viscous(previous step) (``dt`` here is the solve's, c dt); operand = x;
+        preconditioner."""
+        ti.loop_config(serialize=runtime.serial_loops)
+        for i in range(self.state.n_material):
+            target = (1.0 - start_weight) * self.v_star[i] + start_weight * self.state.velocity_start[i]
+            if ti.static(self.tr_bdf2):
+                target += stage_weight * self.stage_image[i]
             self.target[i] = target
             x = target + dt * self.state.viscous_acceleration[i]
             self.state.velocity[i] = x
@@ -188,14 +205,24 @@ class ImplicitViscosity(Stage):
             self.momentum.operand[i] = self.preconditioner[i] @ self.residual[i]
 
     @ti.kernel
-    def _end(self, dt: float):
-        """v = v* + dt L y (the whole dt): the pair sums themselves move the velocities, so that momentum
-        is exchanged only in pairs (conserved to round-off, like the explicit term) whatever the
-        residual of y."""
+    def _end(self, dt: float, image_weight: float, stage_weight: float):
+        """v = v* + dt (image_weight L y [+ stage_weight L y1]) (the whole dt): the pair sums themselves
+        move the velocities, so that momentum is exchanged only in pairs (conserved to round-off,
+        like the explicit term) whatever the residual of y."""
         ti.loop_config(serialize=runtime.serial_loops)
         for i in range(self.state.n_material):
-            self.state.viscous_acceleration[i] = self.momentum.image[i]
-            self.state.velocity[i] = self.v_star[i] + dt * self.momentum.image[i]
+            a = image_weight * self.momentum.image[i]
+            if ti.static(self.tr_bdf2):
+                a += stage_weight * self.stage_image[i]
+            self.state.viscous_acceleration[i] = a
+            self.state.velocity[i] = self.v_star[i] + dt * a
+
+    @ti.kernel
+    def _keep_stage_image(self):
+        """L y1 of the trapezoidal stage (TR-BDF2)."""
+        ti.loop_config(serialize=runtime.serial_loops)
+        for i in range(self.state.n_material):
+            self.stage_image[i] = self.momentum.image[i]
 
     # ---- the solve ---------------------------------------------------------------------------
 
@@ -204,13 +231,14 @@ class ImplicitViscosity(Stage):
         launcher(self, "_system_image", out)(dt)
 
     def run(self) -> None:
-        """Solve (I - theta dt L) y = theta v* + (1 - theta) v(n) and set v = v* + dt L y in place of the
-        velocities (v* on entry); with Picard iterations,
-        re-evaluate the viscosity at the mid-step velocity after each solve but the last and solve
-        again from the same v*, starting from the last solution."""
+        """The viscous update of the step in place of the velocities (v* on entry): theta-method or
+        TR-BDF2 (``_update_velocities``); with Picard iterations, re-evaluate the viscosity at the
+        mid-step velocity after each update but the last and update again from the same v*,
+        starting from the last solution."""
         self.steps += 1
         self.run_steps += 1
         self.last_changes = []
+        launcher(self, "_take_star")()
         for iteration in range(self.picard_iterations):
             if iteration > 0:
                 launcher(self, "_keep")()
@@ -218,7 +246,7 @@ class ImplicitViscosity(Stage):
                 for stage in self.refresh:
                     stage.run()
                 launcher(self, "_to_target")()
-            self._solve()
+            self._update_velocities()
             if iteration > 0:  # how far the re-evaluated viscosity moved the solution, per |v*|
                 launcher(self, "_change")()
                 kept_norm2 = launcher(self, "_dot", self.kept, self.kept)()
@@ -254,16 +282,32 @@ class ImplicitViscosity(Stage):
         for i in range(self.state.n_material):
             self.state.velocity[i] = self.v_star[i]
 
-    def _solve(self) -> None:
+    def _update_velocities(self) -> None:
+        """theta-method: (I - theta dt L) y = theta v* + (1 - theta) v(n), v(n+1) = v* + dt L y.
+        TR-BDF2: the trapezoidal stage (I - GAMMA/2 dt L) y1 = GAMMA/2 v* + (1 - GAMMA/2) v(n)
+        (y1 = (v(n) + v(n+GAMMA))/2), then BDF2 (I - GAMMA/2 dt L) y2 = v* + dt L y1 / (2 - GAMMA)
+        (y2 = v(n+1)), and v(n+1) = v* + dt (L y1 / (2 - GAMMA) + GAMMA/2 L y2): the explicit kick
+        f dt = v* - v(n), held over the step, drops out of both right-hand sides."""
         step = float(self.time_step[None])
-        dt = self.theta * step  # the solve's: (I - theta dt L) y = target
         if launcher(self.momentum, "max_implicit_viscosity")() == 0.0:  # every grain within the explicit limit
             launcher(self, "_nothing_to_solve")()
             self.solves += 1
             self.run_solves += 1
             return
         launcher(self.momentum, "compute_diagonal")()
-        launcher(self, "_begin")(dt)
+        if self.tr_bdf2:
+            self._solve(0.5 * GAMMA * step, 1.0 - 0.5 * GAMMA, 0.0)
+            launcher(self, "_keep_stage_image")()
+            self._solve(BDF2_NEW * step, 0.0, BDF2_STAGE * step)
+            launcher(self, "_end")(step, BDF2_NEW, BDF2_STAGE)
+        else:
+            self._solve(self.theta * step, 1.0 - self.theta, 0.0)
+            launcher(self, "_end")(step, 1.0, 0.0)
+
+    def _solve(self, dt: float, start_weight: float, stage_weight: float) -> None:
+        """Solve (I - dt L) y = (1 - start_weight) v* + start_weight v(n) + stage_weight L y1 by
+        BiCGSTAB; on return velocity = y and the momentum stage's image = L y."""
+        launcher(self, "_begin")(dt, start_weight, stage_weight)
         target_norm = launcher(self, "_dot", self.target, self.target)() ** 0.5
         self.momentum.apply_viscous()
         launcher(self, "_first_residual")(dt)
@@ -300,7 +344,6 @@ class ImplicitViscosity(Stage):
             rho = rho_new
         launcher(self, "_copy_velocity_to_operand")()
         self.momentum.apply_viscous()
-        launcher(self, "_end")(step)
         self.iterations += iterations
         self.solves += 1
         self.run_iterations += iterations
