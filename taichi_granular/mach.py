@@ -15,12 +15,16 @@ Mach number into the value of the model's compressibility key that brings it to
 MACH_TARGET x the warning threshold, the speed taken as the larger of the one measured and the
 scene's speed scale (a flow that is still accelerating has not reached its speed yet).
 
-Particle shifting moves particles at zeta h c |grad C| (physics/shifting.py): its rate scales
-with the sound speed, so stiffer grains alone would also shift the particles faster. The advice
-therefore divides numerics.particle_shifting.coefficient by the same factor, so that the change
-of compressibility changes nothing else. Measured on the Table 2 plane with K_t 20x stiffer
-(c 4.5x faster) and zeta left at 0.2: the layer never settled, 37.6 % above [M56] at 55-60 s and
-still accelerating; with zeta / 4.5 as well it settled (docs, inclined plane).
+Two numerical terms scale with the sound speed, so stiffer grains alone would also change them:
+particle shifting moves particles at zeta h c |grad C| (physics/shifting.py) and the density
+diffusion exchanges density at delta h c_0 (physics/continuity.py). The advice therefore divides
+numerics.particle_shifting.coefficient and numerics.density_diffusion by the same factor, so
+that the change of compressibility changes nothing else. Measured on the Table 2 plane with K_t
+20x stiffer (c 4.5x faster): with zeta left at 0.2 the layer never settled (37.6 % above [M56]
+at 55-60 s, still accelerating); with zeta / 4.5 but delta left at 0.02 it swelled by 8 % within
+10 s and kept accelerating through [M56] (velocity error 1.4 % at 15-20 s, 4.8 % at 25-30 s);
+with delta / 4.5 as well it swells as slowly as with Table 2's K_t and meets [M56] (docs,
+inclined plane).
 """
 from __future__ import annotations
 
@@ -73,6 +77,8 @@ def advice(scene: Scene, model, mach: float, speed: float, measured: bool = True
     shifting = scene.numerics.particle_shifting
     if shifting.enabled:  # keep the shift's rate zeta c (module docstring)
         remedy.append(("numerics.particle_shifting.coefficient", shifting.coefficient / factor))
+    if scene.numerics.density_diffusion > 0.0:  # and the density diffusion's delta c_0
+        remedy.append(("numerics.density_diffusion", scene.numerics.density_diffusion / factor))
     settings = ", ".join(f"{key}: {value:.3g}" for key, value in remedy)
     return f"set {settings} (sound {factor:.3g}x faster: Mach {MACH_TARGET * threshold:.2g} at {basis})"
 

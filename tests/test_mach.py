@@ -37,8 +37,11 @@ def test_the_suggested_compressibility_brings_the_flow_to_the_target(capsys):
     shift = float(re.search(r"numerics\.particle_shifting\.coefficient: ([0-9.e+-]+)", out).group(1))
     factor = float(re.search(r"sound ([0-9.e+-]+)x faster", out).group(1))
     assert shift == pytest.approx(0.2 / factor, rel=5e-3)  # the shift's rate zeta c stays what it was
+    delta = float(re.search(r"numerics\.density_diffusion: ([0-9.e+-]+)", out).group(1))
+    assert delta == pytest.approx(0.02 / factor, rel=5e-3)  # and the density diffusion's delta c_0
     mach_after, out_after = _describe_mach(capsys, "gravity.tilt_deg=28", f"material.grain_compressibility={suggested}",
-                                           f"numerics.particle_shifting.coefficient={shift}")
+                                           f"numerics.particle_shifting.coefficient={shift}",
+                                           f"numerics.density_diffusion={delta}")
     assert mach_after == pytest.approx(MACH_TARGET * 0.3, abs=0.01)
     assert "warning" not in out_after
 
