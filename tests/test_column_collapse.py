@@ -93,6 +93,15 @@ def test_front_stop_is_read_when_the_front_slows_below_one_percent_for_a_tenth_o
     detached = front.copy()
     detached[6:] -= 0.5e-3
     assert cc.front_stop(t, detached) == 4
+    # ... but a tip still running when it separates is no stop: the stop is read after it left
+    # (the a = 2.75 collapse at 19.44 mm: a grain rolled over the stopped front at half the peak
+    # speed; the frame before it separated had passed for the stop)
+    rolled = front.copy()
+    rolled[5:8] = 8.0e-3 + np.array([1.0, 2.0, 3.0]) * 1e-3  # 0.05 m/s, a third of the peak ...
+    rolled[8:] = 8.0e-3 + 0.2e-3 + 1.0e-3 * (t[8:] - t[7])  # ... then it is gone: the body's front
+    assert cc.front_stop(t, rolled) == 7  # read as the frame before it left, without the guard
+    assert cc.front_stop(t, rolled, step_back=1.0e-3) == 8
+    assert cc.front_stop(t, detached, step_back=1.0e-3) == 4  # a step back within it is still a stop
     # ... nor is its catching up again a burst of speed (the peak is read on the running maximum)
     rejoined = front.copy()
     rejoined[8] -= 2.0e-3

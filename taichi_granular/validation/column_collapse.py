@@ -22,7 +22,9 @@ decay, and its kinetic energy levels off instead of falling below REST_FRACTION 
 Rest is therefore the front's: the front has stopped at the first frame after its peak speed
 from which it runs ahead slower than FRONT_STOP_FRACTION of that peak for FRONT_STOP_WINDOW
 seconds (measured as the advance from that frame to each frame of the window), and never
-again faster than SURGE_FRACTION of the peak (a pause followed by a second surge is no stop).
+again faster than SURGE_FRACTION of the peak (a pause followed by a second surge is no stop),
+nor stepping back by more than STEP_BACK particle spacings within the window (a grain that
+leaves the deposit while still moving is not its front).
 r_inf is read there, as an experimentalist reads it; the creep speed afterwards (also as a
 share of the peak) and the kinetic-energy plateau (its median over the frames after the stop,
 over its peak) are reported beside it. A deposit whose kinetic energy falls below REST_FRACTION of
@@ -46,6 +48,7 @@ REST_FRACTION = 1e-3  # at rest: kinetic energy below this share of its peak
 FRONT_STOP_FRACTION = 0.01  # the front has stopped: slower than this share of its peak speed ...
 FRONT_STOP_WINDOW = 0.1  # [s] ... for this long
 SURGE_FRACTION = 0.05  # ... and never again faster than this share of its peak (no second surge)
+STEP_BACK = 0.5  # ... nor stepping back by more than this many particle spacings within the window
 BULK_FRACTION = 0.98  # the bulk run-out: the distance from the axis within which this share of the mass lies
 SECTORS = 16  # 3D: azimuthal sectors whose outermost particles make the front
 
@@ -234,14 +237,19 @@ def peak_speed(times: Sequence[float], front: Sequence[float]) -> tuple:
     return peak, float(speed[peak])
 
 
-def front_stop(times: Sequence[float], front: Sequence[float], at_rest_at_end: bool = False) -> Optional[int]:
+def front_stop(times: Sequence[float], front: Sequence[float], at_rest_at_end: bool = False,
+               step_back: float = math.inf) -> Optional[int]:
     """Index of the frame at which the front stopped (module docstring): the first after its
     peak speed from which it runs ahead slower than FRONT_STOP_FRACTION of the peak for
     FRONT_STOP_WINDOW seconds and never again faster than SURGE_FRACTION of it; None if there is
     no such frame (a window must fit before the last frame, unless the run ended ``at_rest_at_end``:
     its kinetic energy below REST_FRACTION of the peak, so that the front moves no further). A
     front whose tip detaches steps back; a grain joining it steps on: both are measured as
-    advances from the frame."""
+    advances from the frame. A frame from which the front steps back by more than ``step_back``
+    [m] within the window is no stop either: its front is a grain about to leave the deposit
+    (measured on the a = 2.75 collapse at dp 19.44 mm: a grain that rolled over the stopped
+    front slid 3 cm further at 0.3 m/s, half the front's peak speed, and the frame before it
+    separated passed for the stop, reading it as the run-out: 8 points of Lube)."""
     t, x = np.asarray(times, float), np.asarray(front, float)
     if len(t) < 3:
         return None
@@ -256,7 +264,8 @@ def front_stop(times: Sequence[float], front: Sequence[float], at_rest_at_end: b
         ahead = x[k + 1:] - x[k]
         window = elapsed <= FRONT_STOP_WINDOW + slack
         if (np.all(ahead[window] <= FRONT_STOP_FRACTION * top * elapsed[window])
-                and np.all(ahead <= SURGE_FRACTION * top * elapsed)):
+                and np.all(ahead <= SURGE_FRACTION * top * elapsed)
+                and np.all(-ahead[window] <= step_back)):
             return k
     return None
 
@@ -288,7 +297,7 @@ def evaluate(scene: Scene, times: Sequence[float], frames: Sequence[Dict[str, np
     ke = np.array([d["kinetic_energy"] for d in diagnostics], float)
     ke_times = np.array([d["t"] for d in diagnostics], float)
     rest = time_to_rest(ke_times, ke)
-    stop = front_stop(times, mean, at_rest_at_end=rest is not None)
+    stop = front_stop(times, mean, at_rest_at_end=rest is not None, step_back=STEP_BACK * spacing)
     if stop is None and rest is not None:  # the deposit came to rest before its front's window closed
         stop = int(np.searchsorted(np.asarray(times, float), rest - 1e-9))
     read = stop if stop is not None and not read_at_end else len(fronts) - 1
