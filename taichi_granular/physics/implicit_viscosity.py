@@ -1,4 +1,4 @@
-"""Implicit (theta-method) viscous update of the mu(I) momentum equation
+"""Implicit (TR-BDF2 or theta-method) viscous update of the mu(I) momentum equation
 (``numerics.viscosity: implicit``).
 
 Why: the regularised viscosity reaches eta_hat_max = eta_0 + tau_0 m_0 [M53] in every
@@ -27,21 +27,32 @@ solve's own tolerance, after the first steps (measured): the lag costs nothing w
 solve, so one stays the default. The time step then keeps [M39]'s acoustic limit only
 (physics/rheology/mu_i/model.py).
 
-theta = ``numerics.viscous_theta`` (0.6 by default; 1 is backward Euler). Why not backward
-Euler: its error is first order in dt, and at the acoustic step it is large where a grain's
-excess viscosity makes lambda dt ~ 1 (lambda the rate at which L relaxes it): the grains that
-are starting to yield. Measured on the coarse a = 2.75 collapse (dp 14.58 mm) without particle
+``numerics.viscous_scheme`` chooses how the stiff term is integrated over the step.
+
+theta (``numerics.viscous_theta``; 1 is backward Euler): the update above. Backward Euler's
+error is first order in dt, and at the acoustic step it is large where a grain's excess
+viscosity makes lambda dt ~ 1 (lambda the rate at which L relaxes it): the grains that are
+starting to yield. Measured on the coarse a = 2.75 collapse (dp 14.58 mm) without particle
 shifting, where the explicit run is deterministic: the front at 0.08 s is 1.7 / 0.9 / 0.3 / 0.2 mm
 behind the explicit one at cfl 0.5 / 0.25 / 0.1 / 0.05 with backward Euler (linear in dt), and
-within 0.3 mm at cfl 0.5 with theta = 0.6 or 0.52; over forty runs with shifting the front
-stopped 13.9 % earlier than the explicit one with backward Euler, 7.8 % with theta = 0.6 (at the
-coarsest spacing of the study, 19.44 mm, theta = 0.6 reads the run-out at the stop 6 points
-ahead of the explicit one, backward Euler 1.6: docs/validation/column_collapse.md). Picard
-iterations on eta did not move it (the lag is not the error). The first-order error of the
-theta-method is (2 theta - 1) times backward Euler's; a stiff mode (lambda dt >> 1: grains far
-below yield) is multiplied by -(1 - theta)/theta each step, -0.67 at 0.6 (decays, alternating),
--1 at the trapezoidal rule theta = 1/2 (never decays: hence theta > 1/2). v(n+1) = v* + dt L y
-keeps the update a sum of pair terms (momentum conserved, below).
+within 0.3 mm at cfl 0.5 with theta = 0.6 or 0.52. Picard iterations on eta did not move it (the
+lag is not the error). The first-order error of the theta-method is (2 theta - 1) times backward
+Euler's, but a stiff mode (lambda dt >> 1: grains far below yield) is multiplied by
+-(1 - theta)/theta each step, -0.67 at 0.6 (decays, alternating), -1 at the trapezoidal rule
+theta = 1/2 (never decays: hence theta > 1/2). Over forty runs with shifting at 14.58 mm the front
+stopped 13.9 % earlier than the explicit one with backward Euler, 7.8 % with theta = 0.6; at
+19.44 mm theta = 0.6 ran 6 points of Lube ahead of it, backward Euler 1.6
+(docs/validation/column_collapse.md): neither error was small at every resolution.
+
+tr_bdf2 (the default; Bank et al. 1985, Hosea & Shampine 1996): a trapezoidal stage to
+t + GAMMA dt, then BDF2 through v(n), v(n + GAMMA) and v(n+1), GAMMA = 2 - sqrt(2), so that both
+stages solve with the same matrix I - (GAMMA/2) dt L. It is second order like the trapezoidal rule
+and L-stable like backward Euler (a stiff mode is multiplied by ~ -4.8/(|lambda| dt) -> 0), for two
+solves a step of a better-conditioned matrix (5.2 BiCGSTAB iterations a step together on the coarse
+a = 2.75 collapse, against 7.4 for theta = 0.6's one). The explicit kick f dt = v* - v(n), held over
+the step, drops out of both right-hand sides, and v(n+1) = v* + dt (L y1/(2 - GAMMA) + GAMMA/2 L y2)
+is again a sum of pair terms. Measured against the explicit scheme: docs/validation/column_collapse.md,
+"TR-BDF2".
 
 The solve is matrix-free over the neighbour lists: BiCGSTAB (van der Vorst 1992) with right
 block-Jacobi preconditioning by the d x d diagonal blocks of I - theta dt L_[M27] (exact for the
@@ -101,6 +112,8 @@ class ImplicitViscosity(Stage):
         self.dim = dim
         self.theta = ctx.numerics.viscous_theta
         self.tr_bdf2 = ctx.numerics.viscous_scheme == "tr_bdf2"
+        if self.tr_bdf2:
+            self.equation = "TR-BDF2: two solves of (I - (GAMMA/2) dt L) y = target, v = v* + dt (L y1/(2 - GAMMA) + GAMMA/2 L y2), BiCGSTAB"
         # v_star: v* of the step; target: the solve's right-hand side (theta: theta v* + (1 - theta) v(n))
         self.v_star, self.target, self.residual, self.shadow, self.direction, self.v, self.t = (
             ti.Vector.field(dim, float, n) for _ in range(7))
