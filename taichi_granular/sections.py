@@ -127,10 +127,8 @@ class Numerics:
     viscosity: Literal["explicit", "implicit"] = scene_key(
         "mu(I) viscous term: explicit (the step obeys the viscous limit of [M39]) or implicit (the viscosity above "
         "that limit solved each step by TR-BDF2 or the theta-method (numerics.viscous_scheme), BiCGSTAB: only the acoustic limit sets the step, 90-270x "
-        "fewer steps on the collapses; physics/implicit_viscosity.py). The bundled collapses set implicit (their "
-        "run-outs match the explicit ones, measured); the default stays explicit, which every model, wall and "
-        "integrator supports (implicit: mu(I), ghost walls, symplectic Verlet), and on the Table 2 plane, whose "
-        "step the viscous limit does not set, implicit only adds the solve", "explicit")
+        "fewer steps on the collapses; physics/implicit_viscosity.py). Explicit stays the default until the "
+        "implicit run-outs of the tall columns match it (docs, implicit viscosity)", "explicit")
     viscous_tolerance: float = scene_key(
         "implicit viscosity: the solve stops when |residual| <= this x |v*| (the velocities before the viscous "
         "update; against 1e-6, 1e-4 moves the velocities of a collapse by 5e-4 of their largest, measured)",
