@@ -105,6 +105,8 @@ def test_overrides_index_lists():
     ("mu_i/collapse_a0_90.yaml", ["walls.0.type=extrapolated"], "walls[0].type", "ghost particles"),
     ("mu_i/collapse_a0_90.yaml", ["numerics.stress_diffusion=0.1"], "numerics.stress_diffusion", "mu_i does not have it"),
     ("mu_i/collapse_a0_90.yaml", ["numerics.bulk_viscosity=0.1"], "numerics.bulk_viscosity", "mu_i does not have it"),
+    ("mu_i/collapse_a0_90.yaml", ["numerics.viscosity=implicit", "numerics.viscous_theta=1"], "numerics.viscous_theta",
+     "viscous_scheme: theta"),
     ("elastoplastic/collapse3d_a0_90_coarse.yaml", ["numerics.viscosity=implicit"], "numerics.viscosity",
      "elastoplastic does not have it"),
     ("elastoplastic/collapse3d_a0_90_coarse.yaml", ["numerics.stress_increment=0.01"], "numerics.stress_increment",

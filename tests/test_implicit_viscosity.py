@@ -130,10 +130,10 @@ def test_theta_method_is_closer_to_the_transient_than_backward_euler():
     and theta = 0.6 at most (2 theta - 1) = 1/5 of it (measured: 2.8 % and 0.26 % of the peak;
     the reference is within 0.09 % of one at a quarter of its step), while the stiff modes stay
     damped (no velocity above the fine run's peak)."""
-    reference = spin_channel("stress_divergence", 1.0, 200, viscous_theta=1.0)[1][:, 0]
+    reference = spin_channel("stress_divergence", 1.0, 200, viscous_scheme="theta", viscous_theta=1.0)[1][:, 0]
     errors = {}
     for theta in (1.0, 0.6):
-        u = spin_channel("stress_divergence", 25.0, 8, viscous_theta=theta)[1][:, 0]
+        u = spin_channel("stress_divergence", 25.0, 8, viscous_scheme="theta", viscous_theta=theta)[1][:, 0]
         assert u.max() <= 1.001 * reference.max() and np.all(np.isfinite(u))
         errors[theta] = np.abs(u - reference).max() / reference.max()
     assert errors[1.0] > 0.02, errors  # backward Euler's lag is real at this step ...
@@ -149,9 +149,9 @@ def test_tr_bdf2_is_second_order_and_damps_the_stiff_modes_in_one_step():
     (measured -0.66 at 0.6: sign flipped, two thirds left), TR-BDF2 by
     R(z) = (a (1 + GAMMA z/2)/(1 - GAMMA z/2) - b)/(1 - GAMMA z/2) ~ -4.8/|z| -> 0 (L-stable;
     a, b its BDF2 weights; measured -0.009, backward Euler +0.002)."""
-    reference = spin_channel("stress_divergence", 1.0, 200, viscous_theta=1.0)[1][:, 0]
+    reference = spin_channel("stress_divergence", 1.0, 200, viscous_scheme="theta", viscous_theta=1.0)[1][:, 0]
     u = spin_channel("stress_divergence", 25.0, 8, viscous_scheme="tr_bdf2")[1][:, 0]
-    theta = spin_channel("stress_divergence", 25.0, 8, viscous_theta=0.6)[1][:, 0]
+    theta = spin_channel("stress_divergence", 25.0, 8, viscous_scheme="theta", viscous_theta=0.6)[1][:, 0]
     error = np.abs(u - reference).max() / reference.max()
     assert error <= np.abs(theta - reference).max() / reference.max() and error < 0.005, error
 
@@ -162,7 +162,7 @@ def test_tr_bdf2_is_second_order_and_damps_the_stiff_modes_in_one_step():
         return rows["sign"]
 
     left = {}
-    for name, numerics in (("theta", dict(viscous_theta=0.6)), ("tr_bdf2", dict(viscous_scheme="tr_bdf2"))):
+    for name, numerics in (("theta", dict(viscous_scheme="theta", viscous_theta=0.6)), ("tr_bdf2", dict(viscous_scheme="tr_bdf2"))):
         _, velocity, _ = spin_channel("stress_divergence", 1000.0, 1, g=0.0, initial=zigzag, **numerics)
         left[name] = float(np.mean(velocity[:, 0] * rows["sign"]))  # the zig-zag's amplitude after the step
     assert -0.75 < left["theta"] < -0.5, left

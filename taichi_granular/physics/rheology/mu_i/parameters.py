@@ -67,6 +67,9 @@ class MuIMaterial(MaterialParameters):
             if scene.numerics.integrator != "symplectic_verlet":
                 raise ConfigError("numerics.viscosity", "the implicit viscous update runs in the symplectic Verlet "
                                                         "kick; set numerics.integrator: symplectic_verlet")
+            if scene.numerics.viscous_scheme != "theta" and scene.numerics.viscous_theta != 0.6:
+                raise ConfigError("numerics.viscous_theta", "it weighs the theta-method's update, which "
+                                                            "numerics.viscous_scheme: theta selects (tr_bdf2 has no theta)")
             if dynamic:
                 raise ConfigError("numerics.viscosity", "the implicit viscous update supports ghost walls only, not "
                                                         "dynamic boundary particles (walls of type dynamic, "
