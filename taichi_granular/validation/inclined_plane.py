@@ -274,9 +274,10 @@ class InclinedPlaneResult:
 
 
 def binned_profile(frames: Sequence[Dict[str, np.ndarray]], n_material: int, spacing: float,
-                   height: float):
+                   height: float, keep_empty: bool = False):
     """Mean height, down-slope velocity and normal stress of material particles in layers of
-    thickness ``spacing`` (over all given frames)."""
+    thickness ``spacing`` (over all given frames); layers without particles are left out, or
+    with ``keep_empty`` kept as NaN (so that two profiles line up layer by layer)."""
     edges = np.arange(0.0, height + spacing, spacing)
     sums = np.zeros((3, len(edges) - 1))
     counts = np.zeros(len(edges) - 1)
@@ -289,6 +290,10 @@ def binned_profile(frames: Sequence[Dict[str, np.ndarray]], n_material: int, spa
                                          normal_stress(arrays)[:n_material])):
             sums[row] += np.bincount(k[ok], weights=values[ok], minlength=len(counts))
     used = counts > 0
+    if keep_empty:
+        means = np.full_like(sums, np.nan)
+        means[:, used] = sums[:, used] / counts[used]
+        return means[0], means[1], means[2]
     z_mean, v_mean, p_mean = sums[:, used] / counts[used]
     return z_mean, v_mean, p_mean
 
@@ -315,11 +320,12 @@ def evaluate(scene: Scene, times: Sequence[float], frames: Sequence[Dict[str, np
     p_ref = reference.normal_stress(z, height)
     half = len(chosen) // 2
     drift = 0.0
-    if half >= 1:
-        _, v_a, _ = binned_profile(chosen[:half], n_material, dp, top)
-        _, v_b, _ = binned_profile(chosen[half:], n_material, dp, top)
-        if len(v_a) == len(v_b):
-            drift = relative_l2(v_a, v_b)
+    if half >= 1:  # on the layers both halves fill (a sparse top layer may hold particles in one only)
+        _, v_a, _ = binned_profile(chosen[:half], n_material, dp, top, keep_empty=True)
+        _, v_b, _ = binned_profile(chosen[half:], n_material, dp, top, keep_empty=True)
+        both = np.isfinite(v_a) & np.isfinite(v_b)
+        if np.any(both):
+            drift = relative_l2(v_a[both], v_b[both])
     mach = 0.0
     for arrays in chosen:
         c = reference.wave_speed(arrays, n_material)
