@@ -55,8 +55,8 @@ is again a sum of pair terms. Measured against the explicit scheme: docs/validat
 "TR-BDF2".
 
 The solve is matrix-free over the neighbour lists: BiCGSTAB (van der Vorst 1992) with right
-block-Jacobi preconditioning by the d x d diagonal blocks of I - theta dt L_[M27] (exact for the
-pair form, an approximation for the stress form). Why BiCGSTAB and not the conjugate gradient of
+block-Jacobi preconditioning by the d x d diagonal blocks of the solve's I - c dt L_[M27] (c = theta,
+or GAMMA/2 for both TR-BDF2 stages; exact for the pair form, an approximation for the stress form). Why BiCGSTAB and not the conjugate gradient of
 Weiler et al. (2018): the stress form's L, built from the corrected (non-symmetric) SPH
 gradient, is negative definite but not symmetric (tests/test_implicit_viscosity.py measures
 both), and CG needs symmetry. The start is v* plus the previous step's viscous change (in a
@@ -83,7 +83,7 @@ DOT_BLOCK = 256  # particles per partial sum of a dot product
 # I - (GAMMA/2) dt L, and the method L-stable and second order.
 GAMMA = 2.0 - 2.0 ** 0.5
 BDF2_STAGE = 1.0 / (2.0 - GAMMA)  # weight of L y1 (the trapezoidal stage's image) in v(n+1) - v*, per dt
-BDF2_NEW = (1.0 - GAMMA) / (2.0 - GAMMA)  # weight of L v(n+1) in it (= GAMMA/2)
+BDF2_NEW = 0.5 * GAMMA  # weight of L v(n+1) in it, (1 - GAMMA)/(2 - GAMMA), which is GAMMA/2 for this GAMMA
 
 
 class ViscousSolveError(RuntimeError):
@@ -113,7 +113,8 @@ class ImplicitViscosity(Stage):
         self.theta = ctx.numerics.viscous_theta
         self.tr_bdf2 = ctx.numerics.viscous_scheme == "tr_bdf2"
         if self.tr_bdf2:
-            self.equation = "TR-BDF2: two solves of (I - (GAMMA/2) dt L) y = target, v = v* + dt (L y1/(2 - GAMMA) + GAMMA/2 L y2), BiCGSTAB"
+            self.equation = ("TR-BDF2: two solves of (I - (GAMMA/2) dt L) y = target, "
+                             "v = v* + dt (L y1/(2 - GAMMA) + GAMMA/2 L y2), BiCGSTAB")
         # v_star: v* of the step; target: the solve's right-hand side (theta: theta v* + (1 - theta) v(n))
         self.v_star, self.target, self.residual, self.shadow, self.direction, self.v, self.t = (
             ti.Vector.field(dim, float, n) for _ in range(7))
@@ -161,10 +162,17 @@ class ImplicitViscosity(Stage):
             self.v_star[i] = self.state.velocity[i]
 
     @ti.kernel
+    def _prepare_preconditioner(self, dt: float):
+        """The block-Jacobi preconditioner, the inverse of the d x d diagonal blocks of I - dt L (``dt``
+        here is the solve's, c dt: one matrix for both stages of TR-BDF2, so one preparation a step)."""
+        ti.loop_config(serialize=runtime.serial_loops)
+        for i in range(self.state.n_material):
+            self.preconditioner[i] = (ti.Matrix.identity(float, self.dim) - dt * self.momentum.diagonal[i]).inverse()
+
+    @ti.kernel
     def _begin(self, dt: float, start_weight: float, stage_weight: float):
         """target = (1 - start_weight) v* + start_weight v(n) [+ stage_weight L y1 (TR-BDF2)];
-        x = target + dt a_viscous(previous step) (``dt`` here is the solve's, c dt); operand = x;
-        preconditioner."""
+        x = target + dt a_viscous(previous step) (``dt`` here is the solve's, c dt); operand = x."""
         ti.loop_config(serialize=runtime.serial_loops)
         for i in range(self.state.n_material):
             target = (1.0 - start_weight) * self.v_star[i] + start_weight * self.state.velocity_start[i]
@@ -174,11 +182,10 @@ class ImplicitViscosity(Stage):
             x = target + dt * self.state.viscous_acceleration[i]
             self.state.velocity[i] = x
             self.momentum.operand[i] = x
-            self.preconditioner[i] = (ti.Matrix.identity(float, self.dim) - dt * self.momentum.diagonal[i]).inverse()
 
     @ti.kernel
     def _first_residual(self, dt: float):
-        """r = target - (I - dt L) x (dt: the solve's theta dt); the shadow residual r^ = r; p = v = 0."""
+        """r = target - (I - dt L) x (dt: the solve's c dt); the shadow residual r^ = r; p = v = 0."""
         ti.loop_config(serialize=runtime.serial_loops)
         for i in range(self.state.n_material):
             r = self.target[i] - (self.state.velocity[i] - dt * self.momentum.image[i])
@@ -198,7 +205,7 @@ class ImplicitViscosity(Stage):
 
     @ti.kernel
     def _system_image(self, dt: float, out: ti.template()):
-        """out = (I - dt L) operand (dt: the solve's theta dt), with image = L operand."""
+        """out = (I - dt L) operand (dt: the solve's c dt), with image = L operand."""
         ti.loop_config(serialize=runtime.serial_loops)
         for i in range(self.state.n_material):
             out[i] = self.momentum.operand[i] - dt * self.momentum.image[i]
@@ -309,11 +316,14 @@ class ImplicitViscosity(Stage):
             return
         launcher(self.momentum, "compute_diagonal")()
         if self.tr_bdf2:
-            self._solve(0.5 * GAMMA * step, 1.0 - 0.5 * GAMMA, 0.0)
+            solve_dt = BDF2_NEW * step  # GAMMA/2 dt, both stages
+            launcher(self, "_prepare_preconditioner")(solve_dt)
+            self._solve(solve_dt, 1.0 - 0.5 * GAMMA, 0.0)
             launcher(self, "_keep_stage_image")()
-            self._solve(BDF2_NEW * step, 0.0, BDF2_STAGE * step)
+            self._solve(solve_dt, 0.0, BDF2_STAGE * step)
             launcher(self, "_end")(step, BDF2_NEW, BDF2_STAGE)
         else:
+            launcher(self, "_prepare_preconditioner")(self.theta * step)
             self._solve(self.theta * step, 1.0 - self.theta, 0.0)
             launcher(self, "_end")(step, 1.0, 0.0)
 

@@ -32,7 +32,7 @@ term that is linear in the velocity through the viscosity (the deviatoric stress
 residual damping, or the [M27] pair term), which offers that same sum as a linear operator:
 ``apply_viscous()`` writes L(operand) to ``image``, with the viscosity, densities, positions
 and kernel corrections of the rate evaluation frozen. physics/implicit_viscosity.py solves
-(I - theta dt L) y = theta v* + (1 - theta) v(n) with it. Ghost walls enter L as they enter the
+systems (I - c dt L) y = target with it (TR-BDF2 or the theta-method). Ghost walls enter L as they enter the
 explicit term (their velocity is beta v_i, their deviatoric stress i's); the gravity part of an
 extrapolated ghost stress does not depend on v and stays in the rate.
 """

@@ -67,7 +67,8 @@ class MuIMaterial(MaterialParameters):
             if scene.numerics.integrator != "symplectic_verlet":
                 raise ConfigError("numerics.viscosity", "the implicit viscous update runs in the symplectic Verlet "
                                                         "kick; set numerics.integrator: symplectic_verlet")
-            if scene.numerics.viscous_scheme != "theta" and scene.numerics.viscous_theta != 0.6:
+            theta_set = scene.numerics.viscous_theta != type(scene.numerics).viscous_theta  # not the default
+            if scene.numerics.viscous_scheme != "theta" and theta_set:
                 raise ConfigError("numerics.viscous_theta", "it weighs the theta-method's update, which "
                                                             "numerics.viscous_scheme: theta selects (tr_bdf2 has no theta)")
             if dynamic:
