@@ -95,6 +95,51 @@ def test_drum_window_is_the_last_revolution_and_a_loose_start_is_transient():
     assert highest == pytest.approx(26.5, abs=0.5)
 
 
+def stressed_frames(theta_deg=22.4, rising=0.0, grain_density=2650.0, g=9.81):
+    """synthetic_frames with the stress of a layer whose weight its base carries, T_tn = rho g sin
+    theta z, T_nn = -rho g cos theta z (tension positive, z the depth), and an along-surface normal
+    stress T_tt = T_nn (1 + rising s), s the distance downhill from the middle  [1/m]."""
+    times, (frame, _) = synthetic_frames(theta_deg=theta_deg)
+    t = math.radians(theta_deg)
+    tangent, normal = np.array([math.cos(t), math.sin(t)]), np.array([-math.sin(t), math.cos(t)])
+    downhill = -tangent
+    x = frame["position"]
+    z, s = -(x @ normal), x @ downhill
+    rho = grain_density / 1.9
+    weight = rho * g * z
+    n = len(x)
+    stress = (weight * math.sin(t))[:, None, None] * (np.einsum("i,j->ij", downhill, normal) +
+                                                      np.einsum("i,j->ij", normal, downhill))[None]
+    stress -= (weight * math.cos(t))[:, None, None] * np.einsum("i,j->ij", normal, normal)[None]
+    stress -= (weight * math.cos(t) * (1.0 + rising * s))[:, None, None] * np.einsum("i,j->ij", downhill, downhill)[None]
+    frame = dict(frame, mass=np.full(n, rho * 0.005**2), density=np.full(n, rho), pressure=np.zeros(n),
+                 deviatoric_stress=stress.reshape(n, 4), acceleration=np.zeros((n, 3)))
+    return times, [frame, frame], rho * g
+
+
+def test_momentum_budget_of_a_uniform_layer_and_of_one_compressed_downhill():
+    """The drum's momentum budget over the middle: a layer whose base carries its weight reads that
+    (base shear all of the weight, its stress ratio tan theta, faces and inertia nothing, the
+    balance closed); one whose along-surface normal stress rises downhill by a factor (1 + b s)
+    reads the faces' share b z/(2 tan theta) of the weight more (the faces are strips 2 dp wide, which a
+    lattice tilted to them fills unevenly: ~2 % of the weight either way), left as the residual."""
+    scene = load_scene(config_path("hypoplastic/drum_omega1.yaml"))
+    times, frames, _ = stressed_frames()
+    budget = drum.evaluate_drum(scene, times, frames).budget
+    shear, uniform_faces, inertia, residual = budget.shares()
+    assert budget.friction_deg == pytest.approx(22.4, abs=0.1)
+    assert shear == pytest.approx(1.0, abs=0.04) and budget.base_normal == pytest.approx(budget.load, rel=0.04)
+    assert abs(uniform_faces) < 0.03 and inertia == 0.0 and abs(residual) < 0.04
+    times, frames, _ = stressed_frames(rising=2.0)
+    budget = drum.evaluate_drum(scene, times, frames).budget
+    shear, faces, _, residual = budget.shares()
+    expected = 2.0 * budget.depth / (2.0 * math.tan(math.radians(22.4)))
+    assert faces - uniform_faces == pytest.approx(expected, rel=0.1)
+    assert residual == pytest.approx(-faces, abs=0.04)
+    assert budget.friction_deg == pytest.approx(22.4, abs=0.1)
+    assert drum.evaluate_drum(scene, *synthetic_frames()).budget is None  # frames without stresses
+
+
 def test_coarse_drum_rolls_continuously_and_keeps_its_grains():
     """configs/hypoplastic/drum_omega2_coarse.yaml (dp 10 mm, 289 grains) to 1.6 s, measured by
     validate drum over 0.8-1.6 s: after the first avalanche from the tilted start (~0.5 s) the

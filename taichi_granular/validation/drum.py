@@ -15,6 +15,16 @@ integral of u from the surface to delta, and the bed's departure from the rigid 
 max |u - u_rigid| / (omega R) over the bins deeper than delta + 2 dp, u_rigid the drum's
 velocity omega z x (x - c) resolved alike.
 
+What the drum adds beyond that relation is measured by the depth-integrated momentum balance
+along the surface of the flowing layer over the middle of the drum (``BUDGET_SPAN`` R either side
+of the cross-section, from the surface down to the flowing depth; per unit length, averaged over
+the window): the weight along the surface is carried by the shear traction on the layer's base
+(its stress ratio there is the friction the law delivers in the drum's flow), by the difference of
+the along-surface normal stress between the column's downhill and uphill faces (the layer is
+stretched where grains join it and compressed where they leave), by the layer's acceleration,
+and what is left (the closure residual) measures how well the continuum balance describes the
+particles. In steady uniform flow on a plane the base traction alone carries the weight.
+
 The reference is the model's steady prediction: the slope on which a steady layer of the
 measured depth carries the measured flux (the inclined-plane relation of MODEL.md section 2,
 validation/inclined_plane.py ``BagnoldReference.slope_for_flux``): arctan(mu_h) = 26.3 deg with
@@ -34,6 +44,7 @@ import numpy as np
 STEADY_SPAN = 0.5  # the window never reaches into the first half of the run (the spin-up)
 SURFACE_SPAN = 0.6  # of the drum's diameter, centred: the straight middle of the surface
 STRIP = 1.5  # half-width of the cross-section strip, in dp
+BUDGET_SPAN = 0.3  # half-length of the momentum budget's control volume along the surface, of R
 PAPER = {0.5: (21.48, 0.046), 1.0: (22.43, 0.054), 2.0: (24.81, 0.065)}  # [P]: inclination deg, depth m
 INCLINATION_TOLERANCE_DEG = 1.5  # mean inclination against the model's steady prediction
 STEADY_SPREAD_DEG = 2.0  # standard deviation of the inclination over the window: continuous rolling
@@ -64,6 +75,7 @@ class DrumResult:
     initial_void_ratio: float
     froude: float  # omega^2 R / g
     frames: int
+    budget: "MomentumBudget" = None  # the layer's momentum balance over the middle (NaN without stresses)
     depth: np.ndarray = field(repr=False, default=None)
     velocity: np.ndarray = field(repr=False, default=None)
     rigid_velocity: np.ndarray = field(repr=False, default=None)
@@ -148,17 +160,24 @@ def surface_line(x: np.ndarray, centre: np.ndarray, radius: float, spacing: floa
     return float(slope), float(intercept)
 
 
-def cross_section(x, v, centre, omega, slope, intercept, spacing, depth_bins):
-    """Mean downhill velocity of the grains and of the rigid rotation in each depth bin of the
-    strip along the normal through the centre (NaN where a bin is empty)  [m/s]."""
+def surface_frame(x, centre, slope, intercept):
+    """(distance along the surface from the middle cross-section, downhill positive; depth below the
+    surface; downhill unit vector; upward unit normal) of the points ``x`` for the fitted surface
+    line  [m, m, -, -]."""
     rel = x - centre
     tangent = np.array([1.0, slope]) / math.hypot(1.0, slope)
     normal = np.array([-tangent[1], tangent[0]])  # up, out of the surface
     downhill = -tangent * math.copysign(1.0, slope) if slope != 0.0 else tangent
     # the surface point on the normal through the centre: s n with s n_y = intercept + slope s n_x
     s = intercept / (normal[1] - slope * normal[0])
-    along = rel @ tangent
-    depth = s - rel @ normal
+    return rel @ downhill, s - rel @ normal, downhill, normal
+
+
+def cross_section(x, v, centre, omega, slope, intercept, spacing, depth_bins):
+    """Mean downhill velocity of the grains and of the rigid rotation in each depth bin of the
+    strip along the normal through the centre (NaN where a bin is empty)  [m/s]."""
+    rel = x - centre
+    along, depth, downhill, _ = surface_frame(x, centre, slope, intercept)
     in_strip = np.abs(along) <= STRIP * spacing
     u = v @ downhill
     rigid = (omega * np.c_[-rel[:, 1], rel[:, 0]]) @ downhill
@@ -171,6 +190,73 @@ def cross_section(x, v, centre, omega, slope, intercept, spacing, depth_bins):
             u_mean[b] = u[m].mean()
             rigid_mean[b] = rigid[m].mean()
     return u_mean, rigid_mean
+
+
+BUDGET_FIELDS = ("mass", "density", "pressure", "deviatoric_stress", "acceleration")
+
+
+@dataclass
+class MomentumBudget:
+    """Momentum balance along the surface of the flowing layer's column over the middle of the drum
+    (``BUDGET_SPAN`` R either side of the cross-section, from the surface to ``depth``), per unit
+    length, averaged over the window; stresses tension positive in the frames, reported here as
+    forces on the column  [Pa, i.e. N per m of surface per m of drum]."""
+    depth: float  # m, the column's base (the flowing depth)
+    weight: float  # the column's weight along the surface, downhill +
+    load: float  # its weight normal to the surface
+    base_shear: float  # shear traction of the grains below on the base, uphill +
+    base_normal: float  # normal stress on the base, compression +
+    faces: float  # along-surface normal force on the uphill face minus that on the downhill face, over the length: uphill +
+    inertia: float  # mass times acceleration along the surface, downhill +
+
+    @property
+    def residual(self) -> float:
+        """What the continuum balance weight = base shear + faces + inertia leaves  [Pa]."""
+        return self.weight - self.base_shear - self.faces - self.inertia
+
+    @property
+    def friction_deg(self) -> float:
+        """arctan of the base's stress ratio: the friction the law delivers in the drum's flow  [deg]."""
+        return math.degrees(math.atan2(self.base_shear, self.base_normal))
+
+    def shares(self):
+        """(base shear, faces, inertia, residual) as fractions of the weight along the surface."""
+        return tuple(x / self.weight for x in (self.base_shear, self.faces, self.inertia, self.residual))
+
+    def line(self, predicted_deg: float) -> str:
+        shear, faces, inertia, residual = self.shares()
+        return (f"  momentum along the surface, middle {2 * BUDGET_SPAN:.1f} R, layer 0-{1e3 * self.depth:.0f} mm "
+                f"(shares of its weight): base shear {100 * shear:.0f} % (stress ratio "
+                f"{math.tan(math.radians(self.friction_deg)):.3f}, {self.friction_deg:.1f} deg against the "
+                f"model's {predicted_deg:.1f}; base normal stress {100 * self.base_normal / self.load:.0f} % of the "
+                f"load), faces {100 * faces:.0f} % (normal stress rising downhill), inertia {100 * inertia:.0f} %, "
+                f"residual {100 * residual:.0f} %")
+
+
+def momentum_terms(frame, centre, radius, spacing, gravity, slope, intercept, depth):
+    """The terms of ``MomentumBudget`` (after depth) for one frame, in its field order  [Pa]."""
+    n = _material_count(frame)
+    x = frame["position"][:n, :2]
+    along, below, downhill, normal = surface_frame(x, centre, slope, intercept)
+    mass = frame["mass"][:n]
+    volume = mass / frame["density"][:n]
+    stress = frame["deviatoric_stress"][:n].reshape(-1, 2, 2) - frame["pressure"][:n, None, None] * np.eye(2)
+    half = BUDGET_SPAN * radius
+    column = (np.abs(along) < half) & (below < depth)
+    base = (np.abs(along) < half) & (np.abs(below - depth) < 0.5 * spacing)
+    up = (np.abs(along + half) < spacing) & (below < depth)
+    down = (np.abs(along - half) < spacing) & (below < depth)
+    g = np.asarray(gravity, float)[:2]
+    traction = stress @ normal  # on a face whose outward normal is up (tension positive)
+    base_volume = np.sum(volume[base])
+    along_stress = volume * np.einsum("i,nij,j->n", downhill, stress, downhill)  # sigma_tt dV
+    length = 2.0 * half
+    return (np.sum(mass[column]) * (g @ downhill) / length,
+            -np.sum(mass[column]) * (g @ normal) / length,
+            np.sum(volume[base] * (traction[base] @ downhill)) / base_volume,
+            -np.sum(volume[base] * (traction[base] @ normal)) / base_volume,
+            (np.sum(along_stress[up]) - np.sum(along_stress[down])) / (2.0 * spacing) / length,
+            np.sum(mass[column] * (frame["acceleration"][:n, :2][column] @ downhill)) / length)
 
 
 def steady_window(times, omega: float):
@@ -202,12 +288,13 @@ def evaluate_drum(scene, times, frames) -> DrumResult:
     depth_bins = np.arange(0.0, 2.0 * radius + dp, dp)
     every = [surface_inclination(f, centre, radius, dp) for f in frames]
     every_e = [mean_void_ratio(f, scene.material.grain_density) for f in frames]
-    profiles, rigids, areas = [], [], []
+    profiles, rigids, areas, lines = [], [], [], []
     for k in window:
         f = frames[k]
         n = _material_count(f)
         x, v = f["position"][:n, :2], f["velocity"][:n, :2]
         slope, intercept = surface_line(x, centre, radius, dp)
+        lines.append((slope, intercept))
         u, rigid = cross_section(x, v, centre, omega, slope, intercept, dp, depth_bins)
         profiles.append(u)
         rigids.append(rigid)
@@ -227,6 +314,11 @@ def evaluate_drum(scene, times, frames) -> DrumResult:
     bed = depth > flowing_depth + 2.0 * dp
     departure = float(np.max(np.abs(u[bed] - rigid[bed])) / (abs(omega) * radius)) if np.any(bed) else math.nan
     H0 = fill_depth(float(np.mean(areas)), radius)
+    budget = None
+    if not math.isnan(flowing_depth) and all(name in frames[k] for k in window for name in BUDGET_FIELDS):
+        terms = np.mean([momentum_terms(frames[k], centre, radius, dp, scene.gravity_vector, slope, intercept,
+                                        flowing_depth) for k, (slope, intercept) in zip(window, lines)], axis=0)
+        budget = MomentumBudget(flowing_depth, *map(float, terms))
     inclinations, void_ratios = np.array(every)[window], np.array(every_e)[window]
     has_density = not np.all(np.isnan(void_ratios))
     try:
@@ -239,7 +331,7 @@ def evaluate_drum(scene, times, frames) -> DrumResult:
                       predicted, (float(times[window[0]]), float(times[-1])),
                       float(np.mean(void_ratios)) if has_density else math.nan, critical_void_ratio(scene),
                       scene.material.initial_void_ratio, omega**2 * radius / scene.gravity.magnitude, len(window),
-                      depth, u, rigid, list(map(float, times)), every,
+                      budget, depth, u, rigid, list(map(float, times)), every,
                       every_e)
 
 
@@ -317,6 +409,8 @@ def check(case, runs, base, args) -> bool:
         if strip is not None:
             write_png(out / "revolution.png", strip)
         print(result.row(), flush=True)
+        if result.budget is not None:
+            print(result.budget.line(result.predicted_deg), flush=True)
         if result.loose_start:
             settled, low, high = result.transient()
             print(f"  loose start (e_0 {result.initial_void_ratio:.3f} against e* {result.critical_void_ratio:.3f}): "
@@ -334,8 +428,9 @@ def check(case, runs, base, args) -> bool:
           f"{100 * RIGID_TOLERANCE:.0f} % of omega R of rigid rotation, mean inclination within "
           f"{INCLINATION_TOLERANCE_DEG} deg of the model, flowing depth rising with omega): "
           f"{'PASS' if ok else 'FAIL'}; profiles -> {base}/<case>/velocity_profile.csv, .png")
-    write_rows(base, [Row(f"{case.name}: {r.name}", "mean inclination (sd); flowing depth",
-                          f"{r.inclination_deg:.1f} deg ({r.inclination_spread_deg:.1f}); {1e3 * r.flowing_depth:.0f} mm",
+    write_rows(base, [Row(f"{case.name}: {r.name}", "mean inclination (sd); flowing depth; friction at the layer's base",
+                          f"{r.inclination_deg:.1f} deg ({r.inclination_spread_deg:.1f}); {1e3 * r.flowing_depth:.0f} mm; "
+                          + ("-" if r.budget is None else f"{r.budget.friction_deg:.1f} deg"),
                           "-" if r.paper is None else f"{r.paper[0]} deg; {1e3 * r.paper[1]:.0f} mm (out of reach)",
                           f"model's steady slope {r.predicted_deg:.1f} deg",
                           res, run_cost, "transient" if r.loose_start else ("PASS" if r.passed() else "FAIL"))
