@@ -75,7 +75,7 @@ class DrumResult:
     initial_void_ratio: float
     froude: float  # omega^2 R / g
     frames: int
-    budget: "MomentumBudget" = None  # the layer's momentum balance over the middle (NaN without stresses)
+    budget: "MomentumBudget" = None  # the layer's momentum balance over the middle (None: frames without stresses)
     depth: np.ndarray = field(repr=False, default=None)
     velocity: np.ndarray = field(repr=False, default=None)
     rigid_velocity: np.ndarray = field(repr=False, default=None)
@@ -229,7 +229,8 @@ class MomentumBudget:
                 f"(shares of its weight): base shear {100 * shear:.0f} % (stress ratio "
                 f"{math.tan(math.radians(self.friction_deg)):.3f}, {self.friction_deg:.1f} deg against the "
                 f"model's {predicted_deg:.1f}; base normal stress {100 * self.base_normal / self.load:.0f} % of the "
-                f"load), faces {100 * faces:.0f} % (normal stress rising downhill), inertia {100 * inertia:.0f} %, "
+                f"load), faces {100 * faces:.0f} % (along-surface normal force, uphill face minus downhill), "
+                f"inertia {100 * inertia:.0f} %, "
                 f"residual {100 * residual:.0f} %")
 
 
