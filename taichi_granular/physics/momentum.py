@@ -192,10 +192,15 @@ class StressMomentum(_Momentum):
     slot = "forces"
     equation = "[A12]"
 
+    prepares = True
+
     def __init__(self, ctx):
         super().__init__(ctx)
         # the residual damping needs a viscosity (mu(I)); elastic models are damped by [A16]
         self.viscous_residual = ctx.state.has("viscosity")
+        # sigma_k / rho_k^2 of each material particle, computed once a pass rather than once a pair:
+        # the stress, its deviator and the divisions were 40 % of the forces pass (measured)
+        self.specific_stress = ti.Matrix.field(self.dim, self.dim, float, ctx.state.n_material)  # [Pa m^6/kg^2]
         if self.implicit:
             self.operand_gradient = ti.Matrix.field(self.dim, self.dim, float, ctx.state.n_material)  # [1/s]
 
@@ -222,15 +227,25 @@ class StressMomentum(_Momentum):
             return self.model.deviatoric_stress(k)
 
     @ti.func
+    def prepare(self, k):
+        s = self.state
+        sigma = self.rate_deviatoric(k) - s.pressure[k] * ti.Matrix.identity(float, self.dim)
+        self.specific_stress[k] = sigma / s.density[k] ** 2
+
+    @ti.func
     def pair(self, i, j, x_ij, r, acc: ti.template()):
         s = self.state
-        k = self.walls.state_index(i, j)
-        identity = ti.Matrix.identity(float, self.dim)
         grad_w = self.gradient.pairwise(i, j, x_ij, r)
-        sigma_i = self.rate_deviatoric(i) - s.pressure[i] * identity
-        sigma_j = self.walls.stress(i, j, x_ij, self.rate_deviatoric(self.walls.stress_index(i, j))
-                                    - s.pressure[k] * identity)
-        acc += s.mass[j] * ((sigma_i / s.density[i] ** 2 + sigma_j / s.density[k] ** 2) @ grad_w)
+        # a material neighbour is its own state and stress; a boundary one is built by the wall rule
+        term_j = ti.Matrix.zero(float, self.dim, self.dim)
+        if j < s.n_material:
+            term_j = self.specific_stress[j]
+        else:
+            k = self.walls.state_index(i, j)
+            sigma_j = self.walls.stress(i, j, x_ij, self.rate_deviatoric(self.walls.stress_index(i, j))
+                                        - s.pressure[k] * ti.Matrix.identity(float, self.dim))
+            term_j = sigma_j / s.density[k] ** 2
+        acc += s.mass[j] * ((self.specific_stress[i] + term_j) @ grad_w)
         if ti.static(self.viscous_residual):
             acc += self.residual_damping(i, j, x_ij, r, grad_w, s.velocity, s.velocity_gradient, 0)
 

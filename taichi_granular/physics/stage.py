@@ -93,9 +93,16 @@ class PairStage(Stage):
 
     reads: Tuple[str, ...] = ()
     writes: Tuple[str, ...] = ()
+    # a stage whose pair term reads per-particle values it can compute once per particle instead
+    # of once per pair defines ``prepare(i)``: it runs for every material particle before the pass
+    prepares = False
 
     @ti.kernel
     def _run(self):
+        if ti.static(self.prepares):
+            ti.loop_config(serialize=runtime.serial_loops)
+            for i in range(self.state.n_material):
+                self.prepare(i)
         ti.loop_config(serialize=runtime.serial_loops)
         for i in range(self.state.n_material):
             acc = self.initial(i)
@@ -146,6 +153,7 @@ class FusedPairs(Stage):
         self.name = " + ".join(m.name for m in members)
         self.category = members[0].category
         self.equation = " ".join(m.equation for m in members if m.equation)
+        self.prepares = any(m.prepares for m in members)
 
     def run(self) -> None:
         FUSED_COMPILED.update(f"{type(m).__module__}.{type(m).__qualname__}.pair" for m in self.members)
@@ -160,6 +168,12 @@ class FusedPairs(Stage):
     def _run(self):
         # a Python tuple of Taichi locals cannot be built in a loop: one branch per arity
         m = self.members
+        if ti.static(self.prepares):
+            ti.loop_config(serialize=runtime.serial_loops)
+            for i in range(self.state.n_material):
+                for k in ti.static(range(len(m))):
+                    if ti.static(m[k].prepares):
+                        m[k].prepare(i)
         ti.loop_config(serialize=runtime.serial_loops)
         for i in range(self.state.n_material):
             if ti.static(len(m) == 2):

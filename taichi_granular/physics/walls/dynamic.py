@@ -138,6 +138,15 @@ class WallFriction(PairStage):
         self.momentum = MOMENTUM[ctx.numerics.momentum](ctx)
         self.has_viscosity = ctx.numerics.artificial_viscosity.enabled
         self.viscosity = ArtificialViscosity(ctx) if self.has_viscosity else None
+        self.prepares = self.momentum.prepares or self.has_viscosity
+
+    @ti.func
+    def prepare(self, i):
+        """The per-particle values of the momentum and viscosity pair terms this stage re-evaluates."""
+        if ti.static(self.momentum.prepares):
+            self.momentum.prepare(i)
+        if ti.static(self.has_viscosity):
+            self.viscosity.prepare(i)
 
     @ti.func
     def pair(self, i, j, x_ij, r, acc: ti.template()):
