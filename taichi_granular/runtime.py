@@ -25,6 +25,11 @@ serial_loops = False
 # the elastoplastic 2D step, with more and lighter loops, crosses over later (2.00 / 2.45 ms at
 # 2 136, even at 3 166): a loss of up to a fifth for it between the two sizes. 3D mu(I) blocks:
 # 6.9 / 14.1 ms serial against 7.4 / 9.3 parallel at 1 300 / 2 507 particles.
+# Measured again on 2026-12-06, an empty loop over 64 or 2 000 items took 75-90 us parallel against
+# 15 us serial (Taichi's own launch path), so light per-particle loops were tried
+# serially up to 20 000 particles with the pair loops parallel (2026-12-06, medians of 8 batches,
+# 4-5 runs each, separate processes): no gain at 2k (1.79-1.82 against 1.55-1.93 ms a step), a
+# loss at 5k (3.8-4.1 against 2.9-3.4 ms) and 10k (7.7-8.2 against 5.4-6.8 ms): one crossover.
 SERIAL_BELOW = 1_500
 
 
