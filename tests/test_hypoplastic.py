@@ -194,3 +194,21 @@ def test_stationary_simple_shear_solver_finds_the_reference_state(parameter_set,
     I_e, mu_h = et.stationary_simple_shear(model(parameter_set), tolerance=1e-4)
     assert I_e == pytest.approx(density_factor, abs=0.002)
     assert mu_h == pytest.approx(friction, rel=0.01)
+
+
+def test_along_slope_strain_moves_the_critical_friction_on_the_slope_plane():
+    """Point integration of the law (set 2), stationary states of a slope-parallel shear with an
+    isochoric along-slope strain c per unit shear: the same critical density factor (0.913), but
+    the friction on the slope-parallel plane is mu_h only for c = 0; shortening the layer downhill
+    (c = 0.1) raises the along-slope normal stress to 1.21 times the normal one and the friction
+    to 0.537 (28.2 deg), stretching (c = -0.1) lowers them to 0.82 and 0.441 (23.8 deg): what a
+    drum's standing layer carries at its base (docs/models/hypoplastic.md)."""
+    m = model("set2")
+    _, mu_h = et.stationary_simple_shear(m, tolerance=1e-4)
+    for compression, normal_ratio, friction in [(0.1, 1.209, 0.537), (-0.1, 0.819, 0.441)]:
+        I_e, ratio, mu = et.along_slope_friction(m, compression, tolerance=1e-4)
+        assert I_e == pytest.approx(0.913, abs=0.002)
+        assert ratio == pytest.approx(normal_ratio, abs=0.01)
+        assert mu == pytest.approx(friction, abs=0.005)
+        assert (mu - mu_h) * compression > 0.0
+    assert et.along_slope_friction(m, 0.0, tolerance=1e-4)[2] == pytest.approx(mu_h, abs=1e-3)

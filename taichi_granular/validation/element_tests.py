@@ -38,6 +38,7 @@ from ..config import scene_from_dict
 ANNULAR_SOLID_FRACTIONS = (0.461, 0.483, 0.504, 0.524)
 ANNULAR_BAGNOLD = {0.461: 0.0018, 0.483: 0.0027, 0.504: 0.0041, 0.524: 0.0065}  # k_v per C [P]
 ANNULAR_REFERENCE = {"sigma_xz": 36.5, "sigma_zz": 83.2}  # Pa, C = 0.524 [P]
+ALONG_SLOPE_STRAINS = (-0.2, -0.1, 0.0, 0.05, 0.1, 0.2)  # c of along_slope_friction, per unit shear
 STATIONARY_GROWTH = 0.05  # |d ln|T_s| / d strain| below this: stationary
 
 
@@ -75,23 +76,42 @@ class PointIntegrator:
         return self.stress.to_numpy(), float(self.growth[None])
 
 
-def stationary_simple_shear(hypoplastic, low: float = 0.7, high: float = 1.0, tolerance: float = 1e-5):
-    """(I_e, tau/sigma_n) of the stationary state of simple shear, with the Jaumann terms: the
-    density factor where the growth of |T_s| changes sign (bisection; it falls with I_e), and
-    the friction of the hypoplastic part there, mu_h of the inclined plane (MODEL.md section 2;
-    set 1: 0.912 / 0.491, set 2: 0.913 / 0.494)  [-, -]."""
+def stationary_state(hypoplastic, velocity_gradient, low: float = 0.7, high: float = 1.0,
+                     tolerance: float = 1e-5):
+    """(I_e, T) of the stationary state of the rate law under a fixed grad v (3 x 3), Jaumann terms
+    included: the density factor where the growth of |T_s| changes sign (bisection; it falls with
+    I_e), and the stress direction there (tr T = -3)  [-, -]."""
     point = PointIntegrator(hypoplastic)
-    if not point(SIMPLE_SHEAR, low)[1] > 0.0 > point(SIMPLE_SHEAR, high)[1]:
-        raise ValueError(f"no stationary simple shear for I_e in [{low}, {high}]")
+    if not point(velocity_gradient, low)[1] > 0.0 > point(velocity_gradient, high)[1]:
+        raise ValueError(f"no stationary state for I_e in [{low}, {high}]")
     while high - low > tolerance:
         middle = 0.5 * (low + high)
-        if point(SIMPLE_SHEAR, middle)[1] > 0.0:
+        if point(velocity_gradient, middle)[1] > 0.0:
             low = middle
         else:
             high = middle
     density_factor = 0.5 * (low + high)
-    T, _ = point(SIMPLE_SHEAR, density_factor)
+    return density_factor, point(velocity_gradient, density_factor)[0]
+
+
+def stationary_simple_shear(hypoplastic, low: float = 0.7, high: float = 1.0, tolerance: float = 1e-5):
+    """(I_e, tau/sigma_n) of the stationary state of simple shear: the friction of the hypoplastic
+    part there, mu_h of the inclined plane (MODEL.md section 2; set 1: 0.912 / 0.491, set 2:
+    0.913 / 0.494)  [-, -]."""
+    density_factor, T = stationary_state(hypoplastic, SIMPLE_SHEAR, low, high, tolerance)
     return density_factor, float(T[0, 2] / -T[2, 2])
+
+
+def along_slope_friction(hypoplastic, compression: float, tolerance: float = 1e-5):
+    """The stationary state of a slope-parallel shear v_x = z with an isochoric along-slope strain,
+    dv_x/dx = -compression, dv_z/dz = +compression (compression > 0: the layer shortens downhill,
+    as where it decelerates against the bed; < 0: it stretches). Returns (I_e,
+    sigma_xx/sigma_zz, tau/sigma_zz): the friction the law carries on the slope-parallel plane
+    once the along-slope normal stress differs from the normal one (a drum's flowing layer, whose
+    faces carry part of its weight, docs/models/hypoplastic.md)  [-, -, -]."""
+    L = SIMPLE_SHEAR + compression * np.diag([-1.0, 0.0, 1.0])
+    density_factor, T = stationary_state(hypoplastic, L, tolerance=tolerance)
+    return density_factor, float(T[0, 0] / T[2, 2]), float(T[0, 2] / -T[2, 2])
 
 
 def patch_scene(parameter_set: str, void_ratio: float, bagnold_coefficient: Optional[float] = None,
@@ -315,6 +335,14 @@ def check(case, runs, base, args) -> bool:
     stationary = stationary_states()
     for r in stationary:
         print(r.row(), flush=True)
+    print("slope-parallel shear v_x = z with an isochoric along-slope strain -c (x) +c (z), set 2 (the drum's):")
+    print(f"{'c':>6} {'I_e':>7} {'s_xx/s_zz':>10} {'tau/s_zz':>9} {'deg':>6}")
+    from ..physics.rheology.hypoplastic.model import HypoplasticBagnold
+    slope_model = HypoplasticBagnold.from_scene(patch_scene("set2", 0.896))
+    for compression in ALONG_SLOPE_STRAINS:
+        I_e, normal_ratio, friction = along_slope_friction(slope_model, compression)
+        print(f"{compression:>+6.2f} {I_e:>7.4f} {normal_ratio:>10.3f} {friction:>9.4f} "
+              f"{math.degrees(math.atan(friction)):>6.2f}", flush=True)
     print("annular shear cell, v_x = 2 kappa z, kappa = 10 1/s for 0.5 s (strain 10), its parameter set:")
     annular = [annular_shear_cell(c) for c in ANNULAR_SOLID_FRACTIONS]
     for r in annular:
