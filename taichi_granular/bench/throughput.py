@@ -218,8 +218,8 @@ def main(args) -> int:
             print(f"{model}, {dim}D, {args.arch}/{args.precision}, dp = {1e3 * scene.numerics.particle_spacing:g} mm, "
                   f"h/dp = {scene.numerics.smoothing_length_ratio:g}, {scene.numerics.smoothing_function}, "
                   f"{scene.numerics.integrator}, the median of {BATCHES} batches of {args.steps} timed steps")
-            print(f"{'material':>9} {'walls':>7} {'skin':>5} {'order':>9} {'Mmat/s':>8} {'Mall/s':>7} {'ms/step':>9} {'spread':>7} "
-                  f"{'s/sim s':>10} {'MiB':>7} {'nbrs':>6} {'passes':>6} {'Mpairs/s':>8} {'launch/read':>11} "
+            print(f"{'material':>9} {'walls':>7} {'skin':>5} {'order':>9} {'Mmat/s':>8} {'Mall/s':>7} {'ms/step':>9} "
+                  f"{'spread':>7} {'s/sim s':>10} {'MiB':>7} {'nbrs':>6} {'passes':>6} {'Mpairs/s':>8} {'launch/read':>11} "
                   f"{'rebuilt':>7}" + (f" {'sweep ms':>8} {'ratio':>6}" if compare else "") + "  breakdown")
             rows = []
             for size in args.sizes or DEFAULT_SIZES[dim]:
