@@ -153,6 +153,11 @@ def cmd_bench(args) -> int:
     if args.study == "viscosity":
         from .bench.viscosity import main as viscosity
         return viscosity(args)
+    if args.study == "scene":
+        from .bench.scene import main as scene
+        if not args.scenes:
+            raise ConfigError("--scenes", "bench scene needs the scenes to time (files or bundled names)")
+        return scene(args)
     raise AssertionError(args.study)
 
 
@@ -265,13 +270,18 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=cmd_reference)
 
     p = sub.add_parser("bench", parents=[common], help="benchmarks (timing lives here, never in tests)")
-    p.add_argument("study", choices=["throughput", "accuracy", "viscosity"],
+    p.add_argument("study", choices=["throughput", "accuracy", "viscosity", "scene"],
                    help="throughput: particle-steps/s by size; accuracy: error against cost over resolution "
                         "and numerics (bench/accuracy.py); viscosity: explicit against implicit viscosity on the "
-                        "Table 3 collapses (bench/viscosity.py)")
+                        "Table 3 collapses (bench/viscosity.py); scene: a few hundred steps of real scenes and "
+                        "the wall time their full runs would take (bench/scene.py)")
+    p.add_argument("--scenes", nargs="+", help="scene: scene files or bundled names (e.g. elastoplastic/wedge.yaml)")
+    p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                   help="scene: override a key of every scene (repeatable), e.g. --set arch=cuda")
     p.add_argument("--sizes", type=int, nargs="+",
                    help="throughput: approximate particle counts (default 1k 10k 40k 160k in 2D, 10k 40k 150k in 3D)")
-    p.add_argument("--steps", type=int, default=50, help="throughput: timed steps per size")
+    p.add_argument("--steps", type=int, default=50, help="throughput: timed steps per size (and batch); scene: "
+                   "timed steps per scene")
     p.add_argument("--skins", type=float, nargs="+",
                    help="throughput: numerics.neighbour_skin values measured side by side at each size "
                         "(default: the scene default)")

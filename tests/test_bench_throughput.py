@@ -37,3 +37,18 @@ def test_small_blocks_are_a_layer_wide_enough_for_the_periodic_axes():
     support = 2.0 * scene.numerics.smoothing_length
     assert all(u - l >= 3 * support for l, u in zip(block.lower[:2], block.upper[:2]))
     assert block.upper[2] - block.lower[2] == pytest.approx(scene.numerics.particle_spacing)
+
+
+def test_bench_scene_times_a_real_scene_and_projects_its_run():
+    """bench scene (bench/scene.py): the timed steps are taken after the warm-up, the time step
+    and the cost per simulated second are those of the timed steps, and the projection adds the
+    remaining simulated time at that cost."""
+    from taichi_granular.bench import scene
+
+    row = scene.measure_scene("mu_i/collapse_a0_90.yaml", ["numerics.particle_spacing=0.012"], steps=6)
+    assert row["steps"] == 6 and row["arch"] == "cpu"
+    assert 50 < row["material"] < 200 and row["boundary"] > 0
+    assert 0.0 < row["time_step"] < 1e-3
+    assert row["seconds_per_simulated_second"] == pytest.approx(1e-3 * row["ms_per_step"] / row["time_step"])
+    rest = (row["end_time"] - (scene.WARMUP + 6) * row["time_step"]) * row["seconds_per_simulated_second"]
+    assert row["projected_seconds"] > row["compile_and_warmup_seconds"] + 0.5 * rest
