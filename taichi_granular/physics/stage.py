@@ -160,6 +160,12 @@ class FusedPairs(Stage):
         launcher(self, "_run")()
 
     @ti.func
+    def prepare(self, i):
+        for k in ti.static(range(len(self.members))):
+            if ti.static(self.members[k].prepares):
+                self.members[k].prepare(i)
+
+    @ti.func
     def pair(self, i, j, x_ij, r, accs: ti.template()):
         for k in ti.static(range(len(self.members))):
             self.members[k].pair(i, j, x_ij, r, accs[k])
@@ -171,9 +177,7 @@ class FusedPairs(Stage):
         if ti.static(self.prepares):
             ti.loop_config(serialize=runtime.serial_loops)
             for i in range(self.state.n_material):
-                for k in ti.static(range(len(m))):
-                    if ti.static(m[k].prepares):
-                        m[k].prepare(i)
+                self.prepare(i)
         ti.loop_config(serialize=runtime.serial_loops)
         for i in range(self.state.n_material):
             if ti.static(len(m) == 2):
