@@ -123,15 +123,24 @@ def cmd_reference(args) -> int:
     from .reference import REFERENCES
 
     if args.page == "validation":
-        from .validation.table import markdown, update_readme
-        roots = [Path(r) for r in args.root] or [Path("output/validate")]
+        from .validation.table import ARCHIVE, archive, markdown, update_readme
+        roots = [Path(r) for r in args.root] or [r for r in [Path("output/validate")] if r.is_dir()]
+        if args.archive:
+            from .paths import SOURCE_CHECKOUT
+            if not args.root or not SOURCE_CHECKOUT:
+                raise ValueError("--archive needs the folders to archive (--root DIR) and a source checkout "
+                                 "(the archive is the repository's docs/validation/runs)")
+            for copy in archive(*roots):
+                print(f"archived {copy}")
+            roots = []
+        roots.append(ARCHIVE)
         text = markdown(*roots)
         if args.readme:
             update_readme(Path(args.readme), *roots)
             print(f"validation table -> {args.readme}")
     else:
-        if args.root or args.readme:
-            raise ValueError("--root and --readme belong to the validation page")
+        if args.root or args.readme or args.archive:
+            raise ValueError("--root, --archive and --readme belong to the validation page")
         text = REFERENCES[args.page]()
     if args.out:
         from .output import atomic_write_text
@@ -261,11 +270,14 @@ def build_parser() -> argparse.ArgumentParser:
                             "from the declarations the loader checks) or every output field and column")
     p.add_argument("page", choices=["keys", "outputs", "validation"],
                    help="keys: the scene keys; outputs: VTU fields, diagnostics.csv; validation: the summary of the "
-                        "validate runs under output/validate")
+                        "validate runs (archived in docs/validation/runs, and under output/validate)")
     p.add_argument("--out", help="write it to this file (docs/reference/PAGE.md) instead of printing it")
     p.add_argument("--root", action="append", default=[],
-                   help="validation: a folder whose validate runs (their table.csv, found at any depth) make the "
-                        "table (repeatable; default output/validate)")
+                   help="validation: a folder whose validate runs (their table.csv, found at any depth) join the "
+                        "archived rows of docs/validation/runs in the table (repeatable; default output/validate)")
+    p.add_argument("--archive", action="store_true",
+                   help="validation: first copy the --root folders' rows into docs/validation/runs/<folder name>/, "
+                        "so that the table can be regenerated after the run folders are gone")
     p.add_argument("--readme", help="validation: also write the table into this README's validation block")
     p.set_defaults(func=cmd_reference)
 

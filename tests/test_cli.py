@@ -200,6 +200,26 @@ def test_validation_table_is_gathered_from_the_cases_tables(tmp_path):
         update_readme(readme, tmp_path)
 
 
+def test_validation_rows_are_archived_so_the_table_outlives_the_run_folders(tmp_path):
+    """`reference validation --root DIR --archive` copies the runs' rows into the archive, from which
+    the table is regenerated once the run folders are gone; a folder named besides its own archived
+    copy adds no row twice; the repository's archive holds every validated case's rows."""
+    from taichi_granular.validation.table import ARCHIVE, Row, archive, gather, write_rows
+
+    run = tmp_path / "scratch" / "s30_wedge"
+    row = Row("obstacle-flow: wedge_coarse", "protected zone", "0 particles", "-", "[A]", "dp 10 mm", "-", "PASS")
+    write_rows(run / "wedge_coarse", [row])
+    kept = tmp_path / "archive"
+    copies = archive(run, into=kept)
+    assert copies == [kept / "s30_wedge" / "wedge_coarse" / "table.csv"]
+    assert gather(run, kept) == [row]  # the run folder and its copy: one row
+    for path in sorted(run.rglob("*"), reverse=True):
+        path.unlink() if path.is_file() else path.rmdir()
+    assert gather(run, kept) == [row]  # the scratch folder is gone, the row stays
+    archived = {r.case.split(":")[0] for r in gather(ARCHIVE)}
+    assert {"inclined-plane", "column-collapse", "stake-rows", "element-tests", "drum"} <= archived
+
+
 def test_validate_resume_continues_an_interrupted_case_from_its_checkpoint(tmp_path):
     """A case whose run stopped half-way (a checkpoint, no run.json) continues with `validate
     --resume` and takes the same steps as the uninterrupted run (bit-exact resume); its cost
