@@ -155,7 +155,11 @@ def table(*roots: Path) -> str:
 
 
 def markdown(*roots: Path) -> str:
-    return HEADER.format(root=", ".join(str(r) for r in roots)) + table(*roots)
+    def shown(root: Path) -> str:  # the archive as the repository's path, not this machine's
+        root = Path(root).resolve()
+        return str(root.relative_to(REPO)) if REPO in root.parents else str(root)
+
+    return HEADER.format(root=", ".join(shown(r) for r in roots)) + table(*roots)
 
 
 def update_readme(readme: Path, *roots: Path) -> None:
