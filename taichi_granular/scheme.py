@@ -131,7 +131,8 @@ class Scheme:
         capacity = list_capacity(scene.dimension, self.smoothing.support + skin, scene.numerics.particle_spacing)
         self.grid = NeighbourGrid(self.state.position, scene.domain.lower, scene.domain.upper,
                                  scene.domain.periodic_mask, self.smoothing.support, n_moving=ini.n_material,
-                                 skin=skin, capacity=capacity if skin > 0.0 else 0)
+                                 skin=skin, capacity=capacity if skin > 0.0 else 0,
+                                 fixed_move=any(getattr(cls, "moves_boundary", False) for cls in move_classes))
         self.walls = walls_cls(self.state, scene.gravity_vector)
         self.clock = Clock()
         self.dt, self.time, self.step_fraction = self.clock.dt, self.clock.time, self.clock.step_fraction

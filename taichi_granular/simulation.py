@@ -203,7 +203,8 @@ class Simulation:
             self.output.write_diagnostics(self.last_diagnostics)
             if final or self.frame_index % self.scene.run.checkpoint_every == 0:
                 # as stored (particle_id included): the resumed run continues in the same order
-                self.output.write_checkpoint(self.state.to_numpy(), self.counters())
+                self.output.write_checkpoint({**self.state.to_numpy(), **self.scheme.grid.checkpoint_arrays()},
+                                             self.counters())
             if self.renderer is not None:
                 from .render.frames import check_colour_field, png_name, write_png
                 if self.frame_index == 0:  # the first frame comes before the first step
@@ -236,6 +237,7 @@ class Simulation:
         from .output import read_checkpoint
 
         fields, counters = read_checkpoint(self.output.dir)
+        lists = {k: fields.pop(k) for k in [self.scheme.grid.REFERENCE_KEY] if k in fields}
         if "particle_id" not in fields and "position" in fields:  # written before reordering existed
             fields["particle_id"] = np.arange(self.state.n_material, dtype=np.int32)
         missing = set(self.state.specs) - set(fields)
@@ -248,7 +250,8 @@ class Simulation:
         self.last_guarded = self.step_count  # checkpoints are written after the guard passed
         self.peak_kinetic_energy = float(counters["peak_kinetic_energy"])
         self.output.reopen(self.t)
-        self.scheme.place(self.t)  # neighbour grid (and moving walls) of the loaded state
+        self.scheme.place(self.t)  # moving walls of the loaded state
+        self.scheme.grid.restore(lists)  # the neighbour list as the uninterrupted run holds it
 
     def at_rest(self) -> bool:
         """run.stop_at_rest: kinetic energy below that fraction of its peak so far."""

@@ -199,6 +199,7 @@ class WallRotation(Stage):
     slot = "wall_motion"
     category = "walls"
     equation = "rigid rotation"
+    moves_boundary = True  # the neighbour grid tracks the boundary particles' moves (neighbours.py)
     fields = (
         FieldSpec("wall_rest_position", "vector", "x_0, the boundary particle's position at t = 0", "m", "wall"),
         FieldSpec("wall_angular_velocity", "scalar", "omega of the rotating wall (0: fixed)", "rad/s", "wall"),
@@ -211,7 +212,7 @@ class WallRotation(Stage):
 
     def run(self) -> None:
         super().run()
-        self.grid.invalidate_fixed()  # boundary particles moved: rebin them at the next build
+        self.grid.fixed_moved()  # boundary particles moved: the list's rebuild check counts them
 
     @ti.kernel
     def _run(self):
