@@ -224,7 +224,7 @@ class NeighbourGrid:
         built_at = current.copy()
         built_at[: self.n_tracked] = reference
         self.position.from_numpy(built_at)
-        self._fixed_binned, self._stale, self.rebuilds = False, True, 0
+        self._fixed_binned, self._stale = False, True  # rebin everything, rebuild the rows
         self.build()
         self.position.from_numpy(current)
 
