@@ -2,7 +2,8 @@
 
 All have compact support of radius 2h. ``gradient(x_ij, r)`` returns grad_i W_ij for the
 displacement x_ij = x_i - x_j; each function is written so that no division by r occurs,
-which keeps coincident particles finite. h and the dimension are compile-time constants:
+which keeps coincident particles finite. ``second_derivative(r)`` is d^2W/dr^2 (the curvature
+that bounds a stable particle-shifting step, physics/shifting.py). h and the dimension are compile-time constants:
 an instance passed to a kernel as a template gets its own compiled code.
 """
 
@@ -13,7 +14,8 @@ import taichi as ti
 
 @ti.data_oriented
 class SmoothingFunction:
-    """Base class: ``value(r)`` [1/m^d] and ``gradient(x_ij, r)`` [1/m^(d+1)]."""
+    """Base class: ``value(r)`` [1/m^d], ``gradient(x_ij, r)`` [1/m^(d+1)] and
+    ``second_derivative(r)`` [1/m^(d+2)]."""
 
     name = ""
 
@@ -60,6 +62,15 @@ class WendlandC2(SmoothingFunction):
             f = -10.0 * self.sigma * (2.0 - R) ** 3 / (self.h * self.h)
         return f * x_ij
 
+    @ti.func
+    def second_derivative(self, r):
+        # d^2W/dR^2 = -10 sigma (2 - R)^2 (2 - 4R)
+        R = r / self.h
+        w2 = 0.0
+        if R < 2.0:
+            w2 = -10.0 * self.sigma * (2.0 - R) ** 2 * (2.0 - 4.0 * R) / (self.h * self.h)
+        return w2
+
 
 @ti.data_oriented
 class WendlandC6(SmoothingFunction):
@@ -91,6 +102,15 @@ class WendlandC6(SmoothingFunction):
         if q < 1.0:
             f = -22.0 * self.sigma * (1.0 - q) ** 7 * ((16.0 * q + 7.0) * q + 1.0) / (self.support**2)
         return f * x_ij
+
+    @ti.func
+    def second_derivative(self, r):
+        # d^2W/dq^2 = 22 sigma (1 - q)^6 (160 q^3 + 15 q^2 - 6 q - 1)
+        q = r / self.support
+        w2 = 0.0
+        if q < 1.0:
+            w2 = 22.0 * self.sigma * (1.0 - q) ** 6 * (((160.0 * q + 15.0) * q - 6.0) * q - 1.0) / (self.support**2)
+        return w2
 
 
 @ti.data_oriented
@@ -128,6 +148,17 @@ class CubicSpline(SmoothingFunction):
         elif R < 2.0:
             f = -0.5 * (2.0 - R) ** 2 / R
         return (self.alpha / (self.h * self.h) * f) * x_ij
+
+    @ti.func
+    def second_derivative(self, r):
+        # d^2F/dR^2 = -2 + 3R (R < 1), 2 - R (1 <= R < 2)
+        R = r / self.h
+        f2 = 0.0
+        if R < 1.0:
+            f2 = -2.0 + 3.0 * R
+        elif R < 2.0:
+            f2 = 2.0 - R
+        return self.alpha / (self.h * self.h) * f2
 
 
 SMOOTHING_FUNCTIONS = {cls.name: cls for cls in (WendlandC2, WendlandC6, CubicSpline)}

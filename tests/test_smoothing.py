@@ -36,6 +36,20 @@ def evaluate(sf, points):
     return w.to_numpy(), gw.to_numpy()
 
 
+def second_derivatives(sf, radii):
+    r_field = ti.field(float, len(radii))
+    w2 = ti.field(float, len(radii))
+    r_field.from_numpy(np.asarray(radii, float))
+
+    @ti.kernel
+    def run():
+        for i in range(r_field.shape[0]):
+            w2[i] = sf.second_derivative(r_field[i])
+
+    run()
+    return w2.to_numpy()
+
+
 @pytest.mark.parametrize("name,dim", list(itertools.product(SMOOTHING_FUNCTIONS, (2, 3))))
 def test_smoothing_function(name, dim):
     sf = SMOOTHING_FUNCTIONS[name](H, dim)
@@ -68,3 +82,18 @@ def test_coincident_particles_have_finite_gradient():
         sf = SMOOTHING_FUNCTIONS[name](H, 2)
         w, gw = evaluate(sf, np.zeros((1, 2)))
         assert np.isfinite(w).all() and np.all(gw == 0)
+
+
+@pytest.mark.parametrize("name", list(SMOOTHING_FUNCTIONS))
+def test_second_derivative_is_the_derivative_of_the_gradient(name):
+    """d^2W/dr^2 against central differences of the radial gradient, over the whole support
+    (both branches of the cubic spline), zero beyond it."""
+    sf = SMOOTHING_FUNCTIONS[name](H, 2)
+    radii = np.linspace(0.01, 1.99, 150) * H
+    step = 1e-7
+    along = lambda r: evaluate(sf, np.c_[r, np.zeros_like(r)])[1][:, 0]  # dW/dr on the x axis
+    numeric = (along(radii + step) - along(radii - step)) / (2 * step)
+    exact = second_derivatives(sf, radii)
+    np.testing.assert_allclose(exact, numeric, atol=1e-5 * np.max(np.abs(numeric)))
+    assert exact[0] < 0.0  # the peak at r = 0
+    assert np.all(second_derivatives(sf, [2.0 * H, 2.5 * H]) == 0.0)
