@@ -91,9 +91,10 @@ class ArtificialStress:
 @dataclass(frozen=True, kw_only=True)
 class ParticleShifting:
     """Particle shifting (after Lind et al. 2012): each step a particle moves by
-    dr_i = -coefficient h c_i dt grad C_i down its concentration gradient, its velocity is
-    carried along by a Taylor correction; on and next to a free surface only the component
-    along the surface is kept.
+    dr_i = -coefficient h c_i dt grad C_i down its concentration gradient, at most the Newton
+    step on C (where C is stiff a longer step overshoots and flips the particle back and forth:
+    physics/shifting.py), its velocity is carried along by a Taylor correction; on and next to
+    a free surface only the component along the surface is kept.
     coefficient = 0 removes the stage altogether."""
 
     coefficient: float = scene_key("zeta in dr = -zeta h c dt grad C (0 = off; 0.2 keeps sheared layers ordered)",

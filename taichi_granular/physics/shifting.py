@@ -99,8 +99,8 @@ class ParticleShifting(PairStage):
             acc[0, a] += volume * weight * grad[a]
             acc[1, a] -= surface * x_ij[a]
             acc[2, a] += volume * grad[a]
-        # f = W'/r from the gradient (no division by r); the radial term needs r > 0 (a
-        # coincident pair has no direction: its curvature is isotropic, w f)
+        # f = W'/r from grad W = f x_ij (W''(0) at r = 0, its limit); the radial term needs r > 0
+        # (a coincident pair has no direction: its curvature is isotropic, w f)
         f = self.smoothing.second_derivative(0.0)
         radial = 0.0
         if r > 0.0:
