@@ -195,6 +195,15 @@ def test_validation_table_is_gathered_from_the_cases_tables(tmp_path):
                ["numerics.particle_spacing=0.0006", "material.regularisation_time=3.6"])
     frames = [{"is_wall": np.zeros(5)}]
     assert resolution(scene, frames, tmp_path) == "dp 1.2 mm, 5 particles, material.regularisation_time=3.6"
+    # a later run of the same case and resolution replaces the earlier one in the README, not in summary.md
+    write_rows(tmp_path / "s99_rerun" / "drum", [Row("drum: drum_omega1", "mean inclination; flowing depth",
+                                                     "27.0 deg; 40 mm", "22.43 deg; 54 mm", "[P]'s table",
+                                                     "dp 5 mm, 1212 particles", "-", "FAIL")])
+    readme.write_text(f"{README_BEGIN}\n{README_END}\n")
+    update_readme(readme, tmp_path)
+    written = readme.read_text()
+    assert "27.0 deg; 40 mm" in written and "30.8 deg; 46 mm" not in written
+    assert "27.0 deg; 40 mm" in markdown(tmp_path) and "30.8 deg; 46 mm" in markdown(tmp_path)
     readme.write_text("# no block\n")
     with pytest.raises(ValueError, match="no validation block"):
         update_readme(readme, tmp_path)
