@@ -3,8 +3,8 @@
 All have compact support of radius 2h. ``gradient(x_ij, r)`` returns grad_i W_ij for the
 displacement x_ij = x_i - x_j; each function is written so that no division by r occurs,
 which keeps coincident particles finite. ``second_derivative(r)`` is d^2W/dr^2 (the curvature
-that bounds a stable particle-shifting step, physics/shifting.py). h and the dimension are compile-time constants:
-an instance passed to a kernel as a template gets its own compiled code.
+that bounds a stable particle-shifting step, physics/shifting.py). h and the dimension are
+compile-time constants: an instance passed to a kernel as a template gets its own compiled code.
 """
 
 import math

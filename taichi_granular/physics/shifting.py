@@ -91,7 +91,8 @@ class ParticleShifting(PairStage):
         s = self.state
         volume = s.mass[j] / s.density[self.walls.state_index(i, j)]
         w = self.smoothing.value(r)
-        ratio = w / self.smoothing.value(self.spacing)
+        w_dp = self.smoothing.value(self.spacing)  # W(dp), the same for every pair
+        ratio = w / w_dp
         weight = 1.0 + ANTI_CLUMPING * ratio ** ANTI_CLUMPING_POWER
         grad = self.smoothing.gradient(x_ij, r)
         surface = 0.0
@@ -112,8 +113,8 @@ class ParticleShifting(PairStage):
             radial = 0.0
             if r > 0.0:
                 f = grad.dot(x_ij) / (r * r)
-                weight_slope = ANTI_CLUMPING * ANTI_CLUMPING_POWER * ratio ** (ANTI_CLUMPING_POWER - 1) * f * r / \
-                    self.smoothing.value(self.spacing)  # d weight/dr
+                # d weight/dr
+                weight_slope = ANTI_CLUMPING * ANTI_CLUMPING_POWER * ratio ** (ANTI_CLUMPING_POWER - 1) * f * r / w_dp
                 radial = weight * self.smoothing.second_derivative(r) + weight_slope * f * r - weight * f
                 radial /= r * r  # of x_ij (x) x_ij
             for a, b in ti.static(ti.ndrange(self.dim, self.dim)):
