@@ -100,7 +100,7 @@ class ParticleShifting:
     coefficient: float = scene_key("zeta in dr = -zeta h c dt grad C (0 = off; 0.2 keeps sheared layers ordered)",
                                    0.2, "-", bounds="[0, 1]")
     free_surface_threshold: float = scene_key(
-        "particles whose kernel sum (Shepard) falls below this are on the free surface (shift along it only)",
+        "particles whose kernel sum (Shepard) falls below this, with a direction free of neighbours, are on the free surface (shift along it only)",
         0.9, "-", bounds="[0.5, 1]")
     conserve_momentum: bool = scene_key(
         "remove the net momentum the Taylor velocity correction adds (exact conservation in closed systems; in a "

@@ -91,3 +91,35 @@ def test_a_squeezed_grain_is_shifted_without_overshoot():
     offsets = np.array(offsets)
     assert np.all(offsets >= -1e-9)  # never across the middle
     assert np.all(np.diff(offsets) <= 1e-12) and offsets[-1] < 1e-3  # settles there
+
+
+def test_a_pocket_is_not_a_free_surface():
+    """Grains round a hole of three missing grains have a kernel sum as low as the surface's, but
+    neighbours all round: they are not free surface (physics/shifting.py FreeSurface), so their
+    shift is not cut to the (non-existent) surface's tangent and fills the pocket; the top row and
+    isolated grains stay free surface."""
+    data = layer(height=0.04, length=0.05, material=HYPOPLASTIC_SAND, smoothing="wendland_c6")
+    data["numerics"]["smoothing_length_ratio"] = 1.3
+    data["walls"][0]["type"] = "extrapolated"
+    sim = Simulation(build(data))
+    n = sim.state.n_material
+    x = sim.state.position.to_numpy()
+    hole = np.argsort(np.linalg.norm(x[:n] - [0.025, 0.02], axis=1))[:3]
+    centre, cells = x[hole].mean(axis=0), x[hole].copy()
+    x[hole] = [[0.01 + 0.015 * k, 0.1] for k in range(3)]  # lifted far above the layer: isolated grains
+    sim.state.position.from_numpy(x)
+    sim.scheme.evaluate_rates()
+    kernel_sum = sim.state.kernel_sum.to_numpy()[:n]
+    surface = sim.state.free_surface.to_numpy()[:n]
+    shift = sim.state.shift_velocity.to_numpy()[:n]
+    y = x[:n, 1]
+    distance = np.linalg.norm(x[:n, None, :] - cells[None, :, :], axis=2).min(axis=1)  # to the nearest cell
+    rim = (distance < 1.1 * 0.005) & (y < 0.05)
+    assert rim.sum() >= 7
+    assert kernel_sum[rim].min() < 0.9  # the Shepard sum alone would call them surface
+    assert surface[rim].max() == 0.0
+    towards_hole = np.sum(shift[rim] * (centre - x[:n][rim]), axis=1)
+    assert np.all(towards_hole > 0.0)  # the full shift, into the pocket
+    top = (y > 0.04 - 0.005) & (y < 0.05)
+    assert np.all(surface[top] == 1.0) and np.all(surface[hole] == 1.0)
+    assert np.all(surface[(y < 0.04 - 0.005) & ~rim] == 0.0)
