@@ -18,8 +18,10 @@ and the integrator moves the particle by dt u_shift_i at the end of the step, ca
 velocity with the first-order Taylor correction v_i += grad v_i . dr_i. Near a free surface
 only the component along the surface is kept (Lind et al.'s treatment), so that shifting never
 inflates a layer: a particle whose kernel sum S_i = sum_j V_j W_ij (self included) is below the
-free-surface threshold is on the surface and its normal is along grad S_i; a particle with such
-neighbours takes as normal the direction towards them. Shifting the surface particles along the
+free-surface threshold, and that is on the free surface or has a neighbour there (FreeSurface:
+a low S_i and a direction free of neighbours), takes as normal grad S_i; a particle with
+neighbours of low S_i takes as normal the direction towards them. A particle of low S_i with no
+free surface within its support is in a pocket of the bulk and is shifted in full. Shifting the surface particles along the
 surface matters: left unshifted, a sheared free-surface row slowly loses its order (the layer
 swelled by 8 % in 4 s on the 2.5 cm layer of the tests, against 2 % with the tangential shift;
 measured).
@@ -69,7 +71,7 @@ class ParticleShifting(PairStage):
     slot = "shifting"
     category = "integration"
     equation = "Lind et al. (2012)"
-    reads = ("free_surface",)
+    reads = ("kernel_sum", "free_surface")
     writes = ("shift_velocity",)
     fields = (FieldSpec("shift_velocity", "vector", "particle shifting velocity -zeta h c grad C", "m/s",
                         "material"),)
@@ -79,16 +81,19 @@ class ParticleShifting(PairStage):
         cfg = ctx.numerics.particle_shifting
         self.dim = ctx.state.dim
         self.coefficient = cfg.coefficient
+        self.threshold = cfg.free_surface_threshold
         self.spacing = ctx.numerics.particle_spacing
         self.h = ctx.smoothing.h
         self.time_step = ctx.time_step  # dt of the step being taken [s] (0 before the first)
 
     @ti.func
     def pair(self, i, j, x_ij, r, acc: ti.template()):
-        """acc[0] += V_j (1 + R (W_ij/W(dp))^n) grad W_ij; acc[1] += direction to free-surface j;
-        acc[2] += V_j grad W_ij (the plain kernel-sum gradient: the surface normal); rows 3.. +=
-        V_j d/dx_i of the row-0 term for pairs closer than dp, the curvature of C that bounds the
-        step (module docstring): tangential part w f I, radial part d(w W')/dr, f = W'/r."""
+        """acc[0] += V_j (1 + R (W_ij/W(dp))^n) grad W_ij; acc[1] += direction to j where j has
+        a kernel sum below the threshold; acc[2] += V_j grad W_ij (the plain kernel-sum gradient: the
+        surface normal); rows 3 .. 2 + dim += V_j d/dx_i of the row-0 term for pairs closer than
+        dp, the curvature of C that bounds the step (module docstring): tangential part w f I,
+        radial part d(w W')/dr, f = W'/r; acc[3 + dim, 0] counts the neighbours on the free
+        surface."""
         s = self.state
         volume = s.mass[j] / s.density[self.walls.state_index(i, j)]
         w = self.smoothing.value(r)
@@ -98,8 +103,10 @@ class ParticleShifting(PairStage):
         grad = self.smoothing.gradient(x_ij, r)
         surface = 0.0
         if j < s.n_material:
-            if s.free_surface[j] > 0.5:
+            if s.kernel_sum[j] < self.threshold:
                 surface = w
+            if s.free_surface[j] > 0.5:
+                acc[3 + self.dim, 0] += 1.0
         for a in ti.static(range(self.dim)):
             acc[0, a] += volume * weight * grad[a]
             acc[1, a] -= surface * x_ij[a]
@@ -123,11 +130,11 @@ class ParticleShifting(PairStage):
 
     @ti.func
     def initial(self, i):
-        return ti.Matrix.zero(float, 3 + self.dim, self.dim)
+        return ti.Matrix.zero(float, 4 + self.dim, self.dim)
 
     @ti.func
     def store(self, i, acc):
-        """The free-surface flags come from the FreeSurface stage, earlier in the step."""
+        """Kernel sums and free-surface flags come from the FreeSurface stage, earlier in the step."""
         s = self.state
         scale = -self.coefficient * self.h * self.model.sound_speed(i)
         shift = ti.Vector.zero(float, self.dim)
@@ -145,11 +152,15 @@ class ParticleShifting(PairStage):
         stiffness = -scale * self.time_step[None] * ti.sqrt(curvature)
         if stiffness > 1.0:
             shift /= stiffness
-        # the surface normal: on the surface along the kernel-sum gradient, below it towards
-        # the surface neighbours
+        # the surface normal: a grain of low kernel sum on or next to the free surface takes the
+        # kernel-sum gradient; one with no free surface within its support is in a pocket and
+        # is shifted in full (FreeSurface); any other grain takes the direction to its neighbours
+        # of low kernel sum
         normal = towards_surface
-        if s.free_surface[i] > 0.5:
-            normal = kernel_sum_gradient
+        if s.kernel_sum[i] < self.threshold:
+            normal = ti.Vector.zero(float, self.dim)
+            if s.free_surface[i] > 0.5 or acc[3 + self.dim, 0] > 0.0:
+                normal = kernel_sum_gradient
         if normal.norm() > 0.0:
             n = normal.normalized()
             shift -= shift.dot(n) * n
@@ -173,18 +184,24 @@ def open_directions(dim):
 class FreeSurface(PairStage):
     """Kernel (Shepard) sum S_i = sum_j V_j W_ij, self and boundary particles included [-], and
     the free-surface flag. S_i falls from ~1 in the bulk to ~0.8 on a free surface (0.79 for the
-    top row of a lattice at h/dp = 1.3 with Wendland C2, 1.006 one row below). A particle is on
-    the free surface where S_i < ``numerics.particle_shifting.free_surface_threshold`` and some
-    direction is open: a cone around it (``open_directions``) holds no neighbour within the
-    kernel's support.
+    top row of a lattice at h/dp = 1.3 with Wendland C2, 1.006 one row below). i is on the free
+    surface where S_i < ``numerics.particle_shifting.free_surface_threshold`` and it has an open
+    direction: a cone round one of ``open_directions`` that holds no neighbour (boundary particles
+    included) within the kernel's support. ParticleShifting shifts a grain of low S_i along the
+    surface only where it or a neighbour is on the free surface, in full where neither is.
 
-    Why the cone: a low kernel sum alone also marks grains in pockets (a hole of a missing grain
-    or two, neighbours all round at 1.3-1.5 dp), and the surface's shift, along the surface only,
-    can never close the pocket. Measured in the 2D drum (omega = 2, dp 5 mm, at 3.0 s): 286 of
-    1 212 grains had S < 0.9 where the surface and the row below hold ~120; first-row grains in
-    such pockets keep the plain kernel gradient (renormalisation determinant 0.10), read the
-    bed's rigid rotation as strain and wound their stress up 1 -> 22 kPa, which shrank the
-    step 2.5-fold (docs/models/hypoplastic.md, What slows the drum)."""
+    Why not the kernel sum alone: it also marks grains round a pocket in the bulk (a hole of a
+    missing grain or two, neighbours all round at 1.3-1.5 dp), and the surface's shift, along the
+    "surface" only, can never close the pocket. Measured in the 2D drum (omega = 2, dp 5 mm, at
+    3.0 s): 286 of 1 212 grains had S < 0.9 where the surface and the row below hold ~120;
+    first-row grains in such pockets keep the plain kernel gradient (renormalisation determinant
+    0.10), read the bed's rigid rotation as strain and wound their stress up 1 -> 22 kPa, which
+    shrank the step 2.5-fold (docs/models/hypoplastic.md, What slows the drum). Why the
+    neighbours as well: grains of a thin layer (the spreading tongue of a column collapse) have
+    neighbours all round and a low kernel sum because the surface is a row away; shifted in
+    full they push the tongue outwards (measured on the coarse a = 0.9 collapse of
+    tests/test_column_collapse.py: its front kept creeping at 24-36 mm/s after 0.4 s, and it
+    stopped short, -29.3 % against -24.0 %)."""
 
     name = "free_surface"
     slot = "free_surface"
@@ -192,8 +209,8 @@ class FreeSurface(PairStage):
     equation = "Shepard sum, open cone"
     writes = ("kernel_sum", "free_surface")
     fields = (FieldSpec("kernel_sum", "scalar", "Shepard sum S_i = sum_j V_j W_ij", "-", "material"),
-              FieldSpec("free_surface", "scalar", "1 on the free surface (S_i below the threshold and an open "
-                        "direction), else 0", "-", "material"))
+              FieldSpec("free_surface", "scalar", "1 on the free surface (S_i below the threshold and a direction "
+                        "free of neighbours), else 0", "-", "material"))
 
     def __init__(self, ctx):
         super().__init__(ctx)

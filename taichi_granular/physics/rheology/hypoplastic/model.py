@@ -87,6 +87,8 @@ class HypoplasticBagnold(Model):
         self.stress_increment = float(numerics.stress_increment) if numerics else 0.0  # stable_time_step
         self.residual_damping = float(numerics.residual_damping) if numerics else 1.0  # secant_viscosity
         self.cfl = float(numerics.cfl) if numerics else 1.0  # the step's CFL factor, undone by alpha_b's own bound
+        # Shepard sum below which a grain is on the free surface
+        self.free_surface_threshold = float(numerics.particle_shifting.free_surface_threshold) if numerics else 0.9
 
     @classmethod
     def from_scene(cls, scene):
@@ -367,10 +369,10 @@ class TotalStress(Stage):
         for i in range(self.state.n_material):
             stress = self.state.frictional_stress[i]
             if ti.static(self.model.collisional):
-                # not on the free surface (physics/shifting.py FreeSurface): there the velocity
+                # not on the free surface (Shepard sum below the threshold): there the velocity
                 # gradient of a few neighbours is poor and T_v ~ gamma_dot^2 amplifies it; measured,
                 # grains of the pile collapse's flanks were shot out at 4.5-5.5 m/s (none without T_v)
-                if self.state.free_surface[i] < 0.5:
+                if self.state.kernel_sum[i] >= ti.static(self.model.free_surface_threshold):
                     stress += self.model.collisional_stress(self.model.embed(self.state.velocity_gradient[i]))
             if ti.static(self.model.bulk_viscosity > 0.0):
                 stress += self.model.bulk_viscous_stress(i, stress)
