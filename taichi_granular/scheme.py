@@ -21,7 +21,7 @@ from .physics.implicit_viscosity import ImplicitViscosity
 from .physics.momentum import MOMENTUM
 from .physics.outflow import Outflow
 from .physics.rheology import model_class
-from .physics.shifting import FreeSurface, ParticleShifting
+from .physics.shifting import FreeSurface, ParticleShifting, SurfaceLayer
 from .physics.stage import MOVE_SLOTS, RATE_SLOTS, Context, fuse_pair_stages, in_slot_order
 from .physics.walls import BOUNDARIES, NoWalls
 from .profiling import StageProfiler
@@ -54,7 +54,7 @@ def rate_stage_classes(scene: Scene, model) -> List[type]:
     if numerics.artificial_stress.enabled:
         classes.append(ArtificialStress)
     if numerics.particle_shifting.enabled:
-        classes.append(ParticleShifting)
+        classes += [SurfaceLayer, ParticleShifting]
     return in_slot_order(classes, RATE_SLOTS)
 
 

@@ -17,11 +17,12 @@ Each rate evaluation computes, for material particle i,
 and the integrator moves the particle by dt u_shift_i at the end of the step, carrying its
 velocity with the first-order Taylor correction v_i += grad v_i . dr_i. Near a free surface
 only the component along the surface is kept (Lind et al.'s treatment), so that shifting never
-inflates a layer: a particle whose kernel sum S_i = sum_j V_j W_ij (self included) is below the
-free-surface threshold, and that is on the free surface or has a neighbour there (FreeSurface:
-a low S_i and a direction free of neighbours), takes as normal grad S_i; a particle with
-neighbours of low S_i takes as normal the direction towards them. A particle of low S_i with no
-free surface within its support is in a pocket of the bulk and is shifted in full. Shifting the surface particles along the
+inflates a layer. The surface layer (SurfaceLayer) is the particles whose kernel sum
+S_i = sum_j V_j W_ij (self included) is below the free-surface threshold and that are on the free
+surface or have a neighbour there (FreeSurface: a low S_i and a direction free of neighbours);
+their normal is grad S_i, and a particle with surface-layer neighbours takes as normal the
+direction towards them. A particle of low S_i with no free surface within its support is in a
+pocket of the bulk, outside the layer, and is shifted in full. Shifting the surface particles along the
 surface matters: left unshifted, a sheared free-surface row slowly loses its order (the layer
 swelled by 8 % in 4 s on the 2.5 cm layer of the tests, against 2 % with the tangential shift;
 measured).
@@ -71,7 +72,7 @@ class ParticleShifting(PairStage):
     slot = "shifting"
     category = "integration"
     equation = "Lind et al. (2012)"
-    reads = ("kernel_sum", "free_surface")
+    reads = ("surface_layer",)
     writes = ("shift_velocity",)
     fields = (FieldSpec("shift_velocity", "vector", "particle shifting velocity -zeta h c grad C", "m/s",
                         "material"),)
@@ -81,19 +82,17 @@ class ParticleShifting(PairStage):
         cfg = ctx.numerics.particle_shifting
         self.dim = ctx.state.dim
         self.coefficient = cfg.coefficient
-        self.threshold = cfg.free_surface_threshold
         self.spacing = ctx.numerics.particle_spacing
         self.h = ctx.smoothing.h
         self.time_step = ctx.time_step  # dt of the step being taken [s] (0 before the first)
 
     @ti.func
     def pair(self, i, j, x_ij, r, acc: ti.template()):
-        """acc[0] += V_j (1 + R (W_ij/W(dp))^n) grad W_ij; acc[1] += direction to j where j has
-        a kernel sum below the threshold; acc[2] += V_j grad W_ij (the plain kernel-sum gradient: the
+        """acc[0] += V_j (1 + R (W_ij/W(dp))^n) grad W_ij; acc[1] += direction to j where j is in
+        the surface layer (SurfaceLayer); acc[2] += V_j grad W_ij (the plain kernel-sum gradient: the
         surface normal); rows 3 .. 2 + dim += V_j d/dx_i of the row-0 term for pairs closer than
         dp, the curvature of C that bounds the step (module docstring): tangential part w f I,
-        radial part d(w W')/dr, f = W'/r; acc[3 + dim, 0] counts the neighbours on the free
-        surface."""
+        radial part d(w W')/dr, f = W'/r."""
         s = self.state
         volume = s.mass[j] / s.density[self.walls.state_index(i, j)]
         w = self.smoothing.value(r)
@@ -103,10 +102,8 @@ class ParticleShifting(PairStage):
         grad = self.smoothing.gradient(x_ij, r)
         surface = 0.0
         if j < s.n_material:
-            if s.kernel_sum[j] < self.threshold:
+            if s.surface_layer[j] > 0.5:
                 surface = w
-            if s.free_surface[j] > 0.5:
-                acc[3 + self.dim, 0] += 1.0
         for a in ti.static(range(self.dim)):
             acc[0, a] += volume * weight * grad[a]
             acc[1, a] -= surface * x_ij[a]
@@ -130,11 +127,11 @@ class ParticleShifting(PairStage):
 
     @ti.func
     def initial(self, i):
-        return ti.Matrix.zero(float, 4 + self.dim, self.dim)
+        return ti.Matrix.zero(float, 3 + self.dim, self.dim)
 
     @ti.func
     def store(self, i, acc):
-        """Kernel sums and free-surface flags come from the FreeSurface stage, earlier in the step."""
+        """The surface layer comes from the SurfaceLayer stage, earlier in the step."""
         s = self.state
         scale = -self.coefficient * self.h * self.model.sound_speed(i)
         shift = ti.Vector.zero(float, self.dim)
@@ -152,15 +149,12 @@ class ParticleShifting(PairStage):
         stiffness = -scale * self.time_step[None] * ti.sqrt(curvature)
         if stiffness > 1.0:
             shift /= stiffness
-        # the surface normal: a grain of low kernel sum on or next to the free surface takes the
-        # kernel-sum gradient; one with no free surface within its support is in a pocket and
-        # is shifted in full (FreeSurface); any other grain takes the direction to its neighbours
-        # of low kernel sum
+        # the surface normal: in the surface layer along the kernel-sum gradient, below it towards
+        # the surface-layer neighbours; a grain of low kernel sum in a pocket of the bulk is in
+        # neither, and is shifted in full (SurfaceLayer)
         normal = towards_surface
-        if s.kernel_sum[i] < self.threshold:
-            normal = ti.Vector.zero(float, self.dim)
-            if s.free_surface[i] > 0.5 or acc[3 + self.dim, 0] > 0.0:
-                normal = kernel_sum_gradient
+        if s.surface_layer[i] > 0.5:
+            normal = kernel_sum_gradient
         if normal.norm() > 0.0:
             n = normal.normalized()
             shift -= shift.dot(n) * n
@@ -187,8 +181,7 @@ class FreeSurface(PairStage):
     top row of a lattice at h/dp = 1.3 with Wendland C2, 1.006 one row below). i is on the free
     surface where S_i < ``numerics.particle_shifting.free_surface_threshold`` and it has an open
     direction: a cone round one of ``open_directions`` that holds no neighbour (boundary particles
-    included) within the kernel's support. ParticleShifting shifts a grain of low S_i along the
-    surface only where it or a neighbour is on the free surface, in full where neither is.
+    included) within the kernel's support.
 
     Why not the kernel sum alone: it also marks grains round a pocket in the bulk (a hole of a
     missing grain or two, neighbours all round at 1.3-1.5 dp), and the surface's shift, along the
@@ -248,3 +241,49 @@ class FreeSurface(PairStage):
         if acc[0] < self.threshold and covered < 0.5:
             surface = 1.0
         self.state.free_surface[i] = surface
+
+
+@ti.data_oriented
+class SurfaceLayer(PairStage):
+    """The grains shifted along the surface only: a kernel sum below the threshold, and on the
+    free surface or with a neighbour there (FreeSurface). Its own pass would cost a neighbour
+    loop; in the kinematics slot it rides in the pass of the continuity and the strain rate.
+
+    Why the neighbours: grains of a thin layer (the spreading tongue of a column collapse) have
+    neighbours all round and a low kernel sum because the surface is a row away; shifted in full
+    they push the tongue outwards (measured on the coarse a = 0.9 collapse of
+    tests/test_column_collapse.py: its front kept creeping at 24-36 mm/s after 0.4 s and stopped
+    short, -29.3 % against -24.0 %). Why not every grain of low kernel sum: grains round a pocket
+    of the bulk (below all of the drum's wall row, whose grains land at the toe loosely packed)
+    then project their neighbours' shift too, and the pocket is never filled (measured, dp 5 mm
+    drum at omega = 2: the wall row's median kernel sum fell 0.89 -> 0.72 within 2.5 s and the
+    step with it, 2.3e-5 -> 1.0e-5 s, as without the open-direction test)."""
+
+    name = "surface_layer"
+    slot = "kinematics"
+    category = "neighbours"
+    equation = "Lind et al. (2012) surface layer"
+    reads = ("free_surface",)
+    writes = ("surface_layer",)
+    fields = (FieldSpec("surface_layer", "scalar", "1 where shifted along the surface only (kernel sum below the "
+                        "threshold, on the free surface or next to it), else 0", "-", "material"),)
+
+    def __init__(self, ctx):
+        super().__init__(ctx)
+        self.threshold = ctx.numerics.particle_shifting.free_surface_threshold
+
+    @ti.func
+    def pair(self, i, j, x_ij, r, acc: ti.template()):
+        if j < self.state.n_material:
+            acc += self.state.free_surface[j]
+
+    @ti.func
+    def initial(self, i):
+        return self.state.free_surface[i]
+
+    @ti.func
+    def store(self, i, surface_neighbours):
+        layer = 0.0
+        if self.state.kernel_sum[i] < self.threshold and surface_neighbours > 0.5:
+            layer = 1.0
+        self.state.surface_layer[i] = layer
