@@ -150,9 +150,11 @@ class Scheme:
         self.viscous_solve = None  # physics/implicit_viscosity.py, between the kick and the drift
         if scene.numerics.implicit_viscosity:
             momentum = next(stage for stage in self.rate_stages if isinstance(stage, tuple(MOMENTUM.values())))
-            # a Picard iteration re-evaluates the viscosity: the stages from the strain rate to it
+            # a Picard iteration re-evaluates the viscosity: the stages from the strain rate to it,
+            # less those of the neighbour category (the surface layer), which read positions only
             names = [stage.name for stage in self.rate_stages]
-            refresh = self.rate_stages[names.index("strain_rate"):names.index("regularised_viscosity") + 1]
+            refresh = [stage for stage in self.rate_stages[names.index("strain_rate"):names.index("regularised_viscosity") + 1]
+                       if stage.category != "neighbours"]
             self.viscous_solve = ImplicitViscosity(ctx, momentum, refresh)
         # after every update: walls act on the new positions, the model on the new state
         self.position_stages = [cls(ctx) for cls in move_classes]
