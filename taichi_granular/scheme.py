@@ -153,8 +153,8 @@ class Scheme:
             # a Picard iteration re-evaluates the viscosity: the stages from the strain rate to it,
             # less those of the neighbour category (the surface layer), which read positions only
             names = [stage.name for stage in self.rate_stages]
-            refresh = [stage for stage in self.rate_stages[names.index("strain_rate"):names.index("regularised_viscosity") + 1]
-                       if stage.category != "neighbours"]
+            span = self.rate_stages[names.index("strain_rate"):names.index("regularised_viscosity") + 1]
+            refresh = [stage for stage in span if stage.category != "neighbours"]
             self.viscous_solve = ImplicitViscosity(ctx, momentum, refresh)
         # after every update: walls act on the new positions, the model on the new state
         self.position_stages = [cls(ctx) for cls in move_classes]

@@ -22,10 +22,10 @@ S_i = sum_j V_j W_ij (self included) is below the free-surface threshold and tha
 surface or have a neighbour there (FreeSurface: a low S_i and a direction free of neighbours);
 their normal is grad S_i, and a particle with surface-layer neighbours takes as normal the
 direction towards them. A particle of low S_i with no free surface within its support is in a
-pocket of the bulk, outside the layer, and is shifted in full. Shifting the surface particles along the
-surface matters: left unshifted, a sheared free-surface row slowly loses its order (the layer
-swelled by 8 % in 4 s on the 2.5 cm layer of the tests, against 2 % with the tangential shift;
-measured).
+pocket of the bulk, outside the layer, and is shifted in full. Shifting the surface particles
+along the surface matters: left unshifted, a sheared free-surface row slowly loses its order
+(the layer swelled by 8 % in 4 s on the 2.5 cm layer of the tests, against 2 % with the
+tangential shift; measured).
 The displacement per step is zeta CFL h^2 |grad C| ~ 0.1 h for zeta = 0.2, CFL = 0.5
 (dt <= CFL h / c) where the arrangement is near a lattice; the integrator caps it at
 MAX_SHIFT h = 0.1 h (integrators.py). Why the cap: the anti-clumping weight grows as
@@ -184,12 +184,7 @@ class FreeSurface(PairStage):
     3.0 s): 286 of 1 212 grains had S < 0.9 where the surface and the row below hold ~120;
     first-row grains in such pockets keep the plain kernel gradient (renormalisation determinant
     0.10), read the bed's rigid rotation as strain and wound their stress up 1 -> 22 kPa, which
-    shrank the step 2.5-fold (docs/models/hypoplastic.md, What slows the drum). Why the
-    neighbours as well: grains of a thin layer (the spreading tongue of a column collapse) have
-    neighbours all round and a low kernel sum because the surface is a row away; shifted in
-    full they push the tongue outwards (measured on the coarse a = 0.9 collapse of
-    tests/test_column_collapse.py: its front kept creeping at 24-36 mm/s after 0.4 s, and it
-    stopped short, -29.3 % against -24.0 %)."""
+    shrank the step 2.5-fold (docs/models/hypoplastic.md, What slowed the drum)."""
 
     name = "free_surface"
     slot = "free_surface"
