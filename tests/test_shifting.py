@@ -2,7 +2,7 @@
 perturbed one, only along a free surface."""
 import numpy as np
 
-from scenes import HYPOPLASTIC_SAND, build, layer
+from scenes import HYPOPLASTIC_SAND, SAND, build, elastoplastic_numerics, layer
 from taichi_granular.simulation import Simulation
 
 
@@ -128,3 +128,38 @@ def test_a_pocket_is_not_a_free_surface():
     top = (y > 0.05 - 0.005) & (y < 0.06)
     assert np.all(surface[top] == 1.0) and np.all(surface[hole] == 1.0)
     assert np.all(surface[(y < 0.05 - 0.005) & ~rim] == 0.0)
+
+
+def test_free_surface_and_a_pocket_in_3d():
+    """A cube of 10^3 grains (cubic spline, h/dp 1.2, threshold 0.97) with its centre grain
+    lifted out: every grain of its faces, edges and corners has an open octant in FreeSurface's
+    turned frame (kernel sums 0.49-0.79) and is free surface; no grain one row in or deeper is
+    (0.99-1.00); the six grains round the hole have a sum under the threshold (0.93) but
+    neighbours in every octant, and are neither free surface nor surface layer (measured)."""
+    dp = 0.01
+    data = {"name": "block3d", "dimension": 3, "precision": "f64",
+            "domain": {"lower": [-0.05, -0.05, -0.05], "upper": [0.3, 0.15, 0.15]},
+            "gravity": {"magnitude": 0.0}, "material": dict(SAND),
+            "particles": [{"name": "block", "lower": [0.0, 0.0, 0.0], "upper": [0.1, 0.1, 0.1],
+                           "initial_stress": "zero"}],
+            "numerics": elastoplastic_numerics(dp, particle_shifting={"coefficient": 0.2,
+                                                                      "free_surface_threshold": 0.97}),
+            "run": {"end_time": 0.01, "output_interval": 0.01}}
+    sim = Simulation(build(data))
+    n = sim.state.n_material
+    x = sim.state.position.to_numpy()
+    hole = int(np.argmin(np.linalg.norm(x[:n] - 0.05, axis=1)))
+    cell = x[hole].copy()
+    x[hole] = [0.25, 0.05, 0.05]  # far from the block: an isolated grain
+    sim.state.position.from_numpy(x)
+    sim.scheme.evaluate_rates()
+    surface = sim.state.free_surface.to_numpy()[:n]
+    layer_flag = sim.state.surface_layer.to_numpy()[:n]
+    kernel_sum = sim.state.kernel_sum.to_numpy()[:n]
+    block = np.arange(n) != hole
+    outer = (np.minimum(x[:n], 0.1 - x[:n]).min(axis=1) < dp) & block
+    rim = (np.linalg.norm(x[:n] - cell, axis=1) < 1.01 * dp) & block
+    assert outer.sum() == 10 ** 3 - 8 ** 3 and rim.sum() == 6
+    assert np.all(surface[outer] == 1.0) and surface[hole] == 1.0
+    assert np.all(surface[block & ~outer] == 0.0)
+    assert kernel_sum[rim].max() < 0.97 and layer_flag[rim].max() == 0.0
