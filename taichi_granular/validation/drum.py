@@ -33,6 +33,13 @@ set 2 plus the Bagnold part's fraction of a degree at these fluxes. [P]'s table 
 reported beside it and not judged: it lies below the lowest slope on which this law flows
 steadily (MODEL.md section 2, "Reachability"). The flux is compared with the kinematic
 Q = omega (R^2 - (R - H_0)^2)/2, H_0 the fill depth of the measured fill area.
+
+The fill's swelling: the area under the fitted surface line inside the drum against the grains'
+own volume sum_i m_i/rho_i, their ratio over the window relative to the first frame's. The
+particles of SPH carry their volume in their continuity density; where they drift apart (or
+together) without that density changing, the fill occupies more (less) of the drum than its
+grains' volumes say, the surface rises (sinks) and every measure above shifts with it
+(docs/models/hypoplastic.md, "The fill swells").
 """
 import math
 from dataclasses import dataclass, field
@@ -76,6 +83,7 @@ class DrumResult:
     froude: float  # omega^2 R / g
     frames: int
     budget: "MomentumBudget" = None  # the layer's momentum balance over the middle (None: frames without stresses)
+    swelling: float = math.nan  # the fill's area under its surface per grain volume, window over first frame, - 1
     depth: np.ndarray = field(repr=False, default=None)
     velocity: np.ndarray = field(repr=False, default=None)
     rigid_velocity: np.ndarray = field(repr=False, default=None)
@@ -111,12 +119,13 @@ class DrumResult:
                 f"{self.inclination_spread_deg:5.2f} {self.predicted_deg:6.2f} {paper[0]:6.2f} "
                 f"{1e3 * self.flowing_depth:6.1f} {1e3 * paper[1]:5.0f} {self.flux:8.5f} {self.kinematic_flux:8.5f} "
                 f"{100 * self.bed_departure:5.1f} {self.void_ratio:6.3f} {self.critical_void_ratio:6.3f} "
-                f"{self.window[0]:6.2f}-{self.window[1]:<6.2f}")
+                f"{self.window[0]:6.2f}-{self.window[1]:<6.2f} {100 * self.swelling:+6.1f}")
 
 
 HEADER = ("case                   omega  Fr     incl   sd    model  [P]    depth  [P]   flux     kinem.   "
-          "bed%  e      e*     window s\n"
-          "                       rad/s         deg    deg   deg    deg    mm     mm    m2/s     m2/s")
+          "bed%  e      e*     window s      swell\n"
+          "                       rad/s         deg    deg   deg    deg    mm     mm    m2/s     m2/s"
+          "                                    %")
 
 
 def fill_depth(area: float, radius: float) -> float:
@@ -260,6 +269,29 @@ def momentum_terms(frame, centre, radius, spacing, gravity, slope, intercept, de
             np.sum(mass[column] * (frame["acceleration"][:n, :2][column] @ downhill)) / length)
 
 
+def segment_area_below(slope: float, intercept: float, radius: float) -> float:
+    """Area of the drum's disc below the line y = slope x + intercept (coordinates relative to the
+    centre): R^2 (pi - acos(d/R)) + d sqrt(R^2 - d^2), d the line's signed height above the centre
+    along its normal  [m^2]."""
+    d = min(max(intercept / math.hypot(1.0, slope), -radius), radius)
+    return radius**2 * (math.pi - math.acos(d / radius)) + d * math.sqrt(radius**2 - d * d)
+
+
+def fill_occupancy(frame, centre, radius, spacing) -> float:
+    """The area under the fitted surface line per unit of the grains' own volume sum m/rho (one dp^2
+    a grain in frames without density); NaN where the surface is not found  [-]."""
+    n = _material_count(frame)
+    try:
+        slope, intercept = surface_line(frame["position"][:n, :2], centre, radius, spacing)
+    except ValueError:
+        return math.nan
+    if "mass" in frame and "density" in frame:
+        volume = float(np.sum(frame["mass"][:n] / frame["density"][:n]))
+    else:
+        volume = n * spacing * spacing
+    return segment_area_below(slope, intercept, radius) / volume
+
+
 def steady_window(times, omega: float):
     """Indices of the frames of the steady window: the last revolution, within the second half of
     the run."""
@@ -320,6 +352,8 @@ def evaluate_drum(scene, times, frames) -> DrumResult:
         terms = np.mean([momentum_terms(frames[k], centre, radius, dp, scene.gravity_vector, slope, intercept,
                                         flowing_depth) for k, (slope, intercept) in zip(window, lines)], axis=0)
         budget = MomentumBudget(flowing_depth, *map(float, terms))
+    occupancy = [fill_occupancy(frames[k], centre, radius, dp) for k in window]
+    swelling = float(np.nanmean(occupancy) / fill_occupancy(frames[0], centre, radius, dp) - 1.0)
     inclinations, void_ratios = np.array(every)[window], np.array(every_e)[window]
     has_density = not np.all(np.isnan(void_ratios))
     try:
@@ -332,8 +366,7 @@ def evaluate_drum(scene, times, frames) -> DrumResult:
                       predicted, (float(times[window[0]]), float(times[-1])),
                       float(np.mean(void_ratios)) if has_density else math.nan, critical_void_ratio(scene),
                       scene.material.initial_void_ratio, omega**2 * radius / scene.gravity.magnitude, len(window),
-                      budget, depth, u, rigid, list(map(float, times)), every,
-                      every_e)
+                      budget, swelling, depth, u, rigid, list(map(float, times)), every, every_e)
 
 
 def mean_void_ratio(frame, grain_density: float) -> float:
