@@ -65,6 +65,34 @@ def test_fill_swelling_is_the_area_under_the_surface_against_the_grains_volume()
     assert drum.evaluate_drum(scene, times, [first, later]).swelling == pytest.approx(0.1, rel=1e-9)
 
 
+def test_bed_creep_the_law_needs_and_the_grains_have():
+    """The strain rate the law needs for the rate it is asked for is found back (a known D under
+    a turning, anisotropic stress); a bed at rest in its grains' frame under a uniform isotropic
+    stress needs none and has none; under a uniform anisotropic stress the drum's turning alone
+    (the Jaumann spin) needs a strain rate, and grains given D read it back."""
+    from taichi_granular.physics.rheology.hypoplastic.model import HypoplasticBagnold
+    from taichi_granular.validation import element_tests as et
+    scene = load_scene(config_path("hypoplastic/drum_omega1.yaml"))
+    probe = et.RateProbe(HypoplasticBagnold.from_scene(scene))
+    T = np.array([[-900.0, 120.0, 0.0], [120.0, -700.0, 0.0], [0.0, 0.0, -750.0]])
+    spin = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 0.0]])
+    D = np.array([[0.004, 0.007, 0.0], [0.007, -0.002, 0.0], [0.0, 0.0, 0.0]])
+    found = et.plane_strain_rate_for(probe, T, spin, 0.95, probe(T, D + spin, 0.95))
+    np.testing.assert_allclose(found, D, atol=1e-6)  # the runtime may be f32 (another test first)
+
+    times, frames = synthetic_frames(dp=0.01)
+    n = len(frames[0]["position"])
+    def bed(stress, strain_rate):
+        f = dict(frames[0], frictional_stress=np.tile(np.ravel(stress), (n, 1)), density_factor=np.full(n, 0.95),
+                 velocity_gradient=np.tile(np.ravel(strain_rate), (n, 1)))
+        return drum.evaluate_drum(scene, times, [f, f])
+    at_rest = bed(-800.0 * np.eye(3), np.zeros((2, 2)))
+    assert at_rest.creep_needed == pytest.approx(0.0, abs=1e-9) and at_rest.creep_measured == 0.0
+    turning = bed(T, D[:2, :2])
+    assert turning.creep_needed > 1e-3
+    assert turning.creep_measured == pytest.approx(math.sqrt((D * D).sum()), rel=1e-12)
+
+
 def test_steady_prediction_inverts_the_inclined_plane_profile():
     """slope_for_flux is the inverse of the Bagnold-type profile of MODEL.md section 2: the flux
     (2/5) A H^(5/2) of the profile on a 28 deg slope gives back 28 deg, and a drum-sized flux

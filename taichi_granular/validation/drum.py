@@ -40,6 +40,11 @@ particles of SPH carry their volume in their continuity density; where they drif
 together) without that density changing, the fill occupies more (less) of the drum than its
 grains' volumes say, the surface rises (sinks) and every measure above shifts with it
 (docs/models/hypoplastic.md, "The fill swells").
+
+The bed's creep: the strain rate the rate law needs for the bed to turn rigidly under its own
+window-averaged stress field, steady in the lab, against the strain rate its grains have
+(``bed_creep``); where the grains deform far more than the law asks, the bed's departure from
+rigid rotation is the scheme's, not the model's.
 """
 import math
 from dataclasses import dataclass, field
@@ -84,6 +89,8 @@ class DrumResult:
     frames: int
     budget: "MomentumBudget" = None  # the layer's momentum balance over the middle (None: frames without stresses)
     swelling: float = math.nan  # the fill's area under its surface per grain volume, window over first frame, - 1
+    creep_needed: float = math.nan  # the bed's |D| the law needs to turn rigidly under its stress field, per omega
+    creep_measured: float = math.nan  # the bed grains' median |D|, per omega
     depth: np.ndarray = field(repr=False, default=None)
     velocity: np.ndarray = field(repr=False, default=None)
     rigid_velocity: np.ndarray = field(repr=False, default=None)
@@ -292,6 +299,65 @@ def fill_occupancy(frame, centre, radius, spacing) -> float:
     return segment_area_below(slope, intercept, radius) / volume
 
 
+CREEP_CELL = 2.0  # the lab grid of the bed's steady stress field, in dp
+CREEP_FIELDS = ("frictional_stress", "density_factor", "velocity_gradient")
+
+
+def bed_creep(scene, frames, window, centre, radius, spacing, omega, flowing_depth, lines):
+    """(|D| the law needs, |D| the grains have) in the bed, medians over its cells and grains, per
+    omega  [-, -]. The law's need: the bed turning rigidly (v = omega z x (x - c), spin omega)
+    under the frictional stress field T_s(x) of the window, averaged on a lab grid of CREEP_CELL
+    dp, as a steady field: dT_s/dt = v . grad T_s at each cell with full neighbours deeper than
+    the flowing depth + 2 dp and 1.5 dp off the wall, solved for the plane strain rate D that
+    gives it (element_tests.plane_strain_rate_for). The grains': |D| of their SPH velocity
+    gradient in the same cells. NaN for frames without stresses (synthetic ones)."""
+    from ..physics.rheology.hypoplastic.model import HypoplasticBagnold
+    from .element_tests import RateProbe, plane_strain_rate_for
+    if math.isnan(flowing_depth) or not all(name in frames[k] for k in window for name in CREEP_FIELDS):
+        return math.nan, math.nan
+    cell = CREEP_CELL * spacing
+    count = int(math.ceil(2.0 * radius / cell))
+    total, factor, weight = np.zeros((count, count, 3, 3)), np.zeros((count, count)), np.zeros((count, count))
+    slope, intercept = np.mean(lines, axis=0)
+    grains_D, grains_cell = [], []
+    for k in window:
+        f = frames[k]
+        n = _material_count(f)
+        index = np.floor((f["position"][:n, :2] - centre + radius) / cell).astype(int).clip(0, count - 1)
+        np.add.at(total, (index[:, 0], index[:, 1]), f["frictional_stress"][:n].reshape(-1, 3, 3))
+        np.add.at(factor, (index[:, 0], index[:, 1]), f["density_factor"][:n])
+        np.add.at(weight, (index[:, 0], index[:, 1]), 1.0)
+        L = f["velocity_gradient"][:n].reshape(n, 2, 2)
+        grains_D.append(np.sqrt((0.25 * (L + L.transpose(0, 2, 1)) ** 2).sum(axis=(1, 2))))  # |D|
+        grains_cell.append(index)
+    filled = weight > 0
+    T = np.where(filled[..., None, None], total / np.maximum(weight, 1)[..., None, None], 0.0)
+    I_e = np.where(filled, factor / np.maximum(weight, 1), 0.0)
+    mid = (np.arange(count) + 0.5) * cell - radius
+    X, Y = np.meshgrid(mid, mid, indexing="ij")
+    _, depth, _, _ = surface_frame(np.stack([X, Y], -1).reshape(-1, 2) + centre, centre, slope, intercept)
+    bed = filled & (depth.reshape(count, count) > flowing_depth + 2.0 * spacing) & \
+        (np.hypot(X, Y) < radius - 1.5 * spacing)
+    inner = np.zeros_like(bed)
+    inner[1:-1, 1:-1] = bed[1:-1, 1:-1] & bed[:-2, 1:-1] & bed[2:, 1:-1] & bed[1:-1, :-2] & bed[1:-1, 2:]
+    from .. import runtime
+    if runtime.current() is None:
+        runtime.init("cpu", scene.precision)
+    probe = RateProbe(HypoplasticBagnold.from_scene(scene))
+    spin = np.array([[0.0, -omega, 0.0], [omega, 0.0, 0.0], [0.0, 0.0, 0.0]])
+    needed = []
+    for a, b in zip(*np.nonzero(inner)):
+        gradient_x = (T[a + 1, b] - T[a - 1, b]) / (2.0 * cell)
+        gradient_y = (T[a, b + 1] - T[a, b - 1]) / (2.0 * cell)
+        rate = omega * (-Y[a, b] * gradient_x + X[a, b] * gradient_y)
+        D = plane_strain_rate_for(probe, T[a, b], spin, I_e[a, b], rate)
+        needed.append(math.sqrt((D * D).sum()))
+    have = np.concatenate([d[inner[c[:, 0], c[:, 1]]] for d, c in zip(grains_D, grains_cell)])
+    if not needed or not len(have):
+        return math.nan, math.nan
+    return float(np.median(needed)) / abs(omega), float(np.median(have)) / abs(omega)
+
+
 def steady_window(times, omega: float):
     """Indices of the frames of the steady window: the last revolution, within the second half of
     the run."""
@@ -352,6 +418,7 @@ def evaluate_drum(scene, times, frames) -> DrumResult:
         terms = np.mean([momentum_terms(frames[k], centre, radius, dp, scene.gravity_vector, slope, intercept,
                                         flowing_depth) for k, (slope, intercept) in zip(window, lines)], axis=0)
         budget = MomentumBudget(flowing_depth, *map(float, terms))
+    creep = bed_creep(scene, frames, window, centre, radius, dp, omega, flowing_depth, lines)
     occupancy = [fill_occupancy(frames[k], centre, radius, dp) for k in window]
     swelling = float(np.nanmean(occupancy) / fill_occupancy(frames[0], centre, radius, dp) - 1.0)
     inclinations, void_ratios = np.array(every)[window], np.array(every_e)[window]
@@ -366,7 +433,7 @@ def evaluate_drum(scene, times, frames) -> DrumResult:
                       predicted, (float(times[window[0]]), float(times[-1])),
                       float(np.mean(void_ratios)) if has_density else math.nan, critical_void_ratio(scene),
                       scene.material.initial_void_ratio, omega**2 * radius / scene.gravity.magnitude, len(window),
-                      budget, swelling, depth, u, rigid, list(map(float, times)), every, every_e)
+                      budget, swelling, *creep, depth, u, rigid, list(map(float, times)), every, every_e)
 
 
 def mean_void_ratio(frame, grain_density: float) -> float:
@@ -445,6 +512,9 @@ def check(case, runs, base, args) -> bool:
         print(result.row(), flush=True)
         if result.budget is not None:
             print(result.budget.line(result.predicted_deg), flush=True)
+        if not math.isnan(result.creep_needed):
+            print(f"  bed: the law needs |D| = {result.creep_needed:.4f} omega to turn rigidly under its own stress "
+                  f"field; its grains deform at {result.creep_measured:.4f} omega (medians)", flush=True)
         if result.loose_start:
             settled, low, high = result.transient()
             print(f"  loose start (e_0 {result.initial_void_ratio:.3f} against e* {result.critical_void_ratio:.3f}): "

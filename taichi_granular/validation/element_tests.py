@@ -76,6 +76,56 @@ class PointIntegrator:
         return self.stress.to_numpy(), float(self.growth[None])
 
 
+@ti.data_oriented
+class RateProbe:
+    """dT_s/dt of the rate law at one material point: T_s, grad v (3 x 3) and I_e in, the rate
+    (Jaumann terms included, as the stress update integrates it) out  [Pa/s]."""
+
+    def __init__(self, hypoplastic):
+        self.model = hypoplastic
+        self.rate = ti.Matrix.field(3, 3, float, shape=())
+
+    @ti.kernel
+    def run(self, stress: ti.types.matrix(3, 3, float), velocity_gradient: ti.types.matrix(3, 3, float),
+            density_factor: float):
+        self.rate[None] = self.model.frictional_rate(stress, velocity_gradient, density_factor)
+
+    def __call__(self, stress, velocity_gradient, density_factor) -> np.ndarray:
+        self.run(ti.Matrix(np.asarray(stress, float)), ti.Matrix(np.asarray(velocity_gradient, float)),
+                 float(density_factor))
+        return self.rate.to_numpy()
+
+
+def plane_strain_rate_for(probe: RateProbe, stress, spin, density_factor, stress_rate) -> np.ndarray:
+    """The in-plane strain rate D (3 x 3, plane strain, D_zz = 0) for which the law gives the
+    in-plane stress rate ``stress_rate`` (xx, yy, xy) at ``stress`` under the spin ``spin`` (3 x 3,
+    antisymmetric): Newton's method with a finite-difference Jacobian from D = 0 and two starts
+    either side (the |D| term makes the law non-smooth at D = 0), the smallest residual kept  [1/s]."""
+    scale = max(abs(float(np.trace(stress))), 1e-12)
+    omega = abs(float(spin[1, 0])) or 1.0
+
+    def residual(d):
+        D = np.array([[d[0], d[2], 0.0], [d[2], d[1], 0.0], [0.0, 0.0, 0.0]])
+        r = probe(stress, D + spin, density_factor) - stress_rate
+        return np.array([r[0, 0], r[1, 1], r[0, 1]]) / scale
+
+    best, best_norm = None, math.inf
+    for start in ([0.0, 0.0, 0.0], [0.05 * omega, -0.05 * omega, 0.05 * omega],
+                  [-0.05 * omega, 0.05 * omega, -0.05 * omega]):
+        d = np.array(start, float)
+        r = residual(d)
+        for _ in range(50):
+            step = 1e-7 * omega
+            J = np.column_stack([(residual(d + step * e) - r) / step for e in np.eye(3)])
+            delta = np.linalg.lstsq(J, -r, rcond=None)[0]
+            d, r = d + delta, residual(d + delta)
+            if np.linalg.norm(delta) < 1e-12 * omega:
+                break
+        if np.linalg.norm(r) < best_norm:
+            best, best_norm = d, np.linalg.norm(r)
+    return np.array([[best[0], best[2], 0.0], [best[2], best[1], 0.0], [0.0, 0.0, 0.0]])
+
+
 def stationary_state(hypoplastic, velocity_gradient, low: float = 0.7, high: float = 1.0,
                      tolerance: float = 1e-5):
     """(I_e, T) of the stationary state of the rate law under a fixed grad v (3 x 3), Jaumann terms
