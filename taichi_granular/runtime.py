@@ -57,3 +57,10 @@ def choose_loops(n_particles: int) -> None:
 
 def current() -> tuple | None:
     return _current
+
+
+def ensure(precision: str = "f64") -> None:
+    """Starts the CPU runtime if nothing has started one (a point evaluation of the law outside a
+    run: validate --reuse)."""
+    if _current is None:
+        init("cpu", precision)

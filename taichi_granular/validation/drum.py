@@ -284,19 +284,23 @@ def segment_area_below(slope: float, intercept: float, radius: float) -> float:
     return radius**2 * (math.pi - math.acos(d / radius)) + d * math.sqrt(radius**2 - d * d)
 
 
+def grain_volume(frame, spacing) -> float:
+    """The grains' own volume sum m/rho (one dp^2 a grain in frames without density)  [m^2]."""
+    n = _material_count(frame)
+    if "mass" in frame and "density" in frame:
+        return float(np.sum(frame["mass"][:n] / frame["density"][:n]))
+    return n * spacing * spacing
+
+
 def fill_occupancy(frame, centre, radius, spacing) -> float:
-    """The area under the fitted surface line per unit of the grains' own volume sum m/rho (one dp^2
-    a grain in frames without density); NaN where the surface is not found  [-]."""
+    """The area under the fitted surface line per unit of the grains' own volume; NaN where the
+    surface is not found  [-]."""
     n = _material_count(frame)
     try:
         slope, intercept = surface_line(frame["position"][:n, :2], centre, radius, spacing)
     except ValueError:
         return math.nan
-    if "mass" in frame and "density" in frame:
-        volume = float(np.sum(frame["mass"][:n] / frame["density"][:n]))
-    else:
-        volume = n * spacing * spacing
-    return segment_area_below(slope, intercept, radius) / volume
+    return segment_area_below(slope, intercept, radius) / grain_volume(frame, spacing)
 
 
 CREEP_CELL = 2.0  # the lab grid of the bed's steady stress field, in dp
@@ -341,8 +345,7 @@ def bed_creep(scene, frames, window, centre, radius, spacing, omega, flowing_dep
     inner = np.zeros_like(bed)
     inner[1:-1, 1:-1] = bed[1:-1, 1:-1] & bed[:-2, 1:-1] & bed[2:, 1:-1] & bed[1:-1, :-2] & bed[1:-1, 2:]
     from .. import runtime
-    if runtime.current() is None:
-        runtime.init("cpu", scene.precision)
+    runtime.ensure(scene.precision)
     probe = RateProbe(HypoplasticBagnold.from_scene(scene))
     spin = np.array([[0.0, -omega, 0.0], [omega, 0.0, 0.0], [0.0, 0.0, 0.0]])
     needed = []
@@ -397,10 +400,7 @@ def evaluate_drum(scene, times, frames) -> DrumResult:
         u, rigid = cross_section(x, v, centre, omega, slope, intercept, dp, depth_bins)
         profiles.append(u)
         rigids.append(rigid)
-        if "mass" in f and "density" in f:
-            areas.append(float(np.sum(f["mass"][:n] / f["density"][:n])))
-        else:  # synthetic frames: one dp^2 per grain
-            areas.append(n * dp * dp)
+        areas.append(grain_volume(f, dp))
     profiles, rigids = np.array(profiles), np.array(rigids)
     seen = np.any(~np.isnan(profiles), axis=0)  # bins below the drum's bottom stay empty
     u, rigid = np.full(profiles.shape[1], np.nan), np.full(profiles.shape[1], np.nan)
@@ -419,8 +419,8 @@ def evaluate_drum(scene, times, frames) -> DrumResult:
                                         flowing_depth) for k, (slope, intercept) in zip(window, lines)], axis=0)
         budget = MomentumBudget(flowing_depth, *map(float, terms))
     creep = bed_creep(scene, frames, window, centre, radius, dp, omega, flowing_depth, lines)
-    occupancy = [fill_occupancy(frames[k], centre, radius, dp) for k in window]
-    swelling = float(np.nanmean(occupancy) / fill_occupancy(frames[0], centre, radius, dp) - 1.0)
+    occupancy = [segment_area_below(slope, intercept, radius) / area for (slope, intercept), area in zip(lines, areas)]
+    swelling = float(np.mean(occupancy) / fill_occupancy(frames[0], centre, radius, dp) - 1.0)
     inclinations, void_ratios = np.array(every)[window], np.array(every_e)[window]
     has_density = not np.all(np.isnan(void_ratios))
     try:

@@ -77,8 +77,7 @@ def stationary_shear_of(scene: Scene):
         from .. import runtime
         from ..physics.rheology.hypoplastic.model import HypoplasticBagnold
         from .element_tests import stationary_simple_shear
-        if runtime.current() is None:
-            runtime.init("cpu", scene.precision)
+        runtime.ensure(scene.precision)
         _STATIONARY_SHEAR[key] = stationary_simple_shear(HypoplasticBagnold.from_scene(scene))
     return _STATIONARY_SHEAR[key]
 
