@@ -187,6 +187,33 @@ def test_momentum_budget_of_a_uniform_layer_and_of_one_compressed_downhill():
     assert drum.evaluate_drum(scene, *synthetic_frames()).budget is None  # frames without stresses
 
 
+def test_faces_read_the_layers_along_surface_strain_and_the_laws_stress_there():
+    """The budget's faces against the law: a layer shearing at 10 1/s that stretches by c = -0.1 per
+    unit shear uphill of the middle and shortens by +0.1 downhill reads those strains at the faces,
+    the along-surface over normal stress it carries there (1 -/+ rising * half, the faces 0.3 R from
+    the middle), and the law's stationary ratios at +-0.1 from a point of the rate law (0.819 /
+    1.209, set 2, test_hypoplastic); the slope that the law's faces give adds
+    (K_down - K_up) depth / (2 length) to the plane's tan theta."""
+    scene = load_scene(config_path("hypoplastic/drum_omega1.yaml"))
+    times, frames, _ = stressed_frames(rising=2.0)
+    frame = frames[0]
+    t = math.radians(22.4)
+    downhill, normal = -np.array([math.cos(t), math.sin(t)]), np.array([-math.sin(t), math.cos(t)])
+    c = np.where(frame["position"] @ downhill > 0.0, 0.1, -0.1)[:, None, None]
+    shear = 10.0 * (np.einsum("i,j->ij", downhill, normal)[None] - c * np.einsum("i,j->ij", downhill, downhill)[None]
+                    + c * np.einsum("i,j->ij", normal, normal)[None])
+    frame = dict(frame, velocity_gradient=shear.reshape(-1, 4))
+    r = drum.evaluate_drum(scene, times, [frame, frame])
+    half = drum.BUDGET_SPAN * r.radius
+    assert r.faces.strain == pytest.approx((-0.1, 0.1), abs=0.002)  # the fitted surface, not the exact tilt
+    assert r.faces.ratio == pytest.approx((1.0 - 2.0 * half, 1.0 + 2.0 * half), abs=0.01)
+    assert r.faces.law_ratio == pytest.approx((0.819, 1.209), abs=0.01)
+    faces = drum.FaceStates((0.0, 0.0), (1.0, 1.0), (0.8, 1.2))
+    assert faces.slope_deg(26.3, 0.04, 0.1) == pytest.approx(math.degrees(math.atan(math.tan(math.radians(26.3))
+                                                                                     + 0.4 * 0.04 / 0.2)))
+    assert drum.evaluate_drum(scene, *stressed_frames()[:2]).faces is None  # frames without velocity gradients
+
+
 def test_coarse_drum_rolls_continuously_and_keeps_its_grains():
     """configs/hypoplastic/drum_omega2_coarse.yaml (dp 10 mm, 289 grains) to 2.0 s, measured by
     validate drum over 1.0-2.0 s: after the first avalanche from the tilted start (~0.5 s) the

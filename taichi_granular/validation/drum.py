@@ -91,6 +91,7 @@ class DrumResult:
     swelling: float = math.nan  # the fill's area under its surface per grain volume, window over first frame, - 1
     creep_needed: float = math.nan  # the bed's |D| the law needs to turn rigidly under its stress field, per omega
     creep_measured: float = math.nan  # the bed grains' median |D|, per omega
+    faces: "FaceStates" = None  # the budget's faces against the law (None: frames without stresses)
     depth: np.ndarray = field(repr=False, default=None)
     velocity: np.ndarray = field(repr=False, default=None)
     rigid_velocity: np.ndarray = field(repr=False, default=None)
@@ -114,6 +115,13 @@ class DrumResult:
         end = settled[0] if len(settled) else len(t) - 1
         span = inc[1:end + 1] if end >= 1 else inc[:1]
         return float(t[end]), float(np.nanmin(span)), float(np.nanmax(span))
+
+    def faces_slope_deg(self) -> float:
+        """The slope with the law's faces (``FaceStates.slope_deg``) over the budget's length; NaN
+        without them  [deg]."""
+        if self.faces is None:
+            return math.nan
+        return self.faces.slope_deg(self.predicted_deg, self.flowing_depth, 2.0 * BUDGET_SPAN * self.radius)
 
     def passed(self) -> bool:
         """Continuous rolling, a rigid bed, the mean inclination at the model's steady prediction."""
@@ -209,6 +217,7 @@ def cross_section(x, v, centre, omega, slope, intercept, spacing, depth_bins):
 
 
 BUDGET_FIELDS = ("mass", "density", "pressure", "deviatoric_stress", "acceleration")
+FACE_FIELDS = ("pressure", "deviatoric_stress", "velocity_gradient")
 
 
 @dataclass
@@ -257,12 +266,11 @@ def momentum_terms(frame, centre, radius, spacing, gravity, slope, intercept, de
     along, below, downhill, normal = surface_frame(x, centre, slope, intercept)
     mass = frame["mass"][:n]
     volume = mass / frame["density"][:n]
-    stress = frame["deviatoric_stress"][:n].reshape(-1, 2, 2) - frame["pressure"][:n, None, None] * np.eye(2)
+    stress = _total_stress(frame, n)
     half = BUDGET_SPAN * radius
     column = (np.abs(along) < half) & (below < depth)
     base = (np.abs(along) < half) & (np.abs(below - depth) < 0.5 * spacing)
-    up = (np.abs(along + half) < spacing) & (below < depth)
-    down = (np.abs(along - half) < spacing) & (below < depth)
+    up, down = _faces(along, below, half, spacing, depth)
     g = np.asarray(gravity, float)[:2]
     traction = stress @ normal  # on a face whose outward normal is up (tension positive)
     base_volume = np.sum(volume[base])
@@ -274,6 +282,83 @@ def momentum_terms(frame, centre, radius, spacing, gravity, slope, intercept, de
             -np.sum(volume[base] * (traction[base] @ normal)) / base_volume,
             (np.sum(along_stress[up]) - np.sum(along_stress[down])) / (2.0 * spacing) / length,
             np.sum(mass[column] * (frame["acceleration"][:n, :2][column] @ downhill)) / length)
+
+
+def _faces(along, below, half, spacing, depth):
+    """Masks of the grains in the budget's uphill and downhill faces: strips 2 dp wide at -half and
+    +half along the surface, from the surface down to ``depth``."""
+    return ((np.abs(along + half) < spacing) & (below < depth),
+            (np.abs(along - half) < spacing) & (below < depth))
+
+
+def _total_stress(frame, n):
+    """Total stress of the first n grains, tension positive (n, 2, 2)  [Pa]."""
+    return frame["deviatoric_stress"][:n].reshape(-1, 2, 2) - frame["pressure"][:n, None, None] * np.eye(2)
+
+
+def face_sums(frame, centre, radius, spacing, slope, intercept, depth):
+    """Sums over the uphill face, then the downhill face, of the budget's column of (dv_t/dt,
+    dv_t/dn, sigma_tt, sigma_nn): t downhill along the surface, n up out of it  [1/s, Pa]."""
+    n = _material_count(frame)
+    along, below, downhill, normal = surface_frame(frame["position"][:n, :2], centre, slope, intercept)
+    L = frame["velocity_gradient"][:n].reshape(n, 2, 2)  # L_ij = dv_i/dx_j
+    stress = _total_stress(frame, n)
+    per_grain = np.stack([np.einsum("i,nij,j->n", downhill, L, downhill), np.einsum("i,nij,j->n", downhill, L, normal),
+                          np.einsum("i,nij,j->n", downhill, stress, downhill),
+                          np.einsum("i,nij,j->n", normal, stress, normal)], axis=1)
+    return np.concatenate([per_grain[m].sum(axis=0) for m in _faces(along, below, BUDGET_SPAN * radius, spacing,
+                                                                      depth)])
+
+
+@dataclass
+class FaceStates:
+    """The budget's uphill and downhill faces against the rate law: the layer's along-surface
+    shortening per unit shear there, c = -(dv_t/dt)/(dv_t/dn) (> 0 where it shortens downhill), its
+    measured along-surface over normal stress sigma_tt/sigma_nn, and the ratio of the law's
+    stationary state under that strain (element_tests.along_slope_friction: a point of the rate law,
+    no SPH). Where the two ratios agree, the faces' share of the weight is the law's answer to the
+    drum's kinematics, not the scheme's  [-]."""
+    strain: tuple  # (uphill, downhill) c
+    ratio: tuple  # (uphill, downhill) measured sigma_tt/sigma_nn, window sums
+    law_ratio: tuple  # (uphill, downhill) the law's stationary sigma_xx/sigma_zz at c (NaN: none for I_e in [0.7, 1])
+
+    def slope_deg(self, plane_deg: float, depth: float, length: float) -> float:
+        """The slope of a layer of ``depth`` whose base runs at the plane's friction and whose faces,
+        ``length`` apart, carry the law's ratios on a hydrostatic normal stress: the depth-integrated
+        balance along the surface gives tan theta = tan(plane) + (K_down - K_up) depth / (2 length)
+        (inertia left out)  [deg]."""
+        up, down = self.law_ratio
+        return math.degrees(math.atan(math.tan(math.radians(plane_deg)) + (down - up) * depth / (2.0 * length)))
+
+    def line(self, plane_deg: float, depth: float, length: float) -> str:
+        slope = self.slope_deg(plane_deg, depth, length)
+        return (f"  faces: along-surface shortening per unit shear {self.strain[0]:+.3f} uphill / "
+                f"{self.strain[1]:+.3f} downhill; sigma_tt/sigma_nn {self.ratio[0]:.3f} / {self.ratio[1]:.3f} "
+                f"measured, {self.law_ratio[0]:.3f} / {self.law_ratio[1]:.3f} the law's stationary state at "
+                f"that strain (a point of the rate law); a layer with the law's faces and the plane's base "
+                f"friction stands at {slope:.1f} deg (the plane's {plane_deg:.1f} + {slope - plane_deg:.1f} the "
+                f"drum's along-surface strain adds)")
+
+
+def face_states(scene, frames, window, centre, radius, spacing, depth, lines):
+    """``FaceStates`` over the window (None for frames without velocity gradients or stresses)."""
+    from ..physics.rheology.hypoplastic.model import HypoplasticBagnold
+    from .element_tests import along_slope_friction
+    if math.isnan(depth) or not all(name in frames[k] for k in window for name in FACE_FIELDS):
+        return None
+    sums = np.sum([face_sums(frames[k], centre, radius, spacing, slope, intercept, depth)
+                   for k, (slope, intercept) in zip(window, lines)], axis=0).reshape(2, 4)
+    strain = -sums[:, 0] / sums[:, 1]
+    from .. import runtime
+    runtime.ensure(scene.precision)
+    model = HypoplasticBagnold.from_scene(scene)
+    law = []
+    for c in strain:
+        try:
+            law.append(along_slope_friction(model, float(c))[1])
+        except ValueError:
+            law.append(math.nan)
+    return FaceStates(tuple(map(float, strain)), tuple(map(float, sums[:, 2] / sums[:, 3])), tuple(law))
 
 
 def segment_area_below(slope: float, intercept: float, radius: float) -> float:
@@ -419,6 +504,7 @@ def evaluate_drum(scene, times, frames) -> DrumResult:
                                         flowing_depth) for k, (slope, intercept) in zip(window, lines)], axis=0)
         budget = MomentumBudget(flowing_depth, *map(float, terms))
     creep = bed_creep(scene, frames, window, centre, radius, dp, omega, flowing_depth, lines)
+    faces = face_states(scene, frames, window, centre, radius, dp, flowing_depth, lines)
     occupancy = [segment_area_below(slope, intercept, radius) / area for (slope, intercept), area in zip(lines, areas)]
     swelling = float(np.mean(occupancy) / fill_occupancy(frames[0], centre, radius, dp) - 1.0)
     inclinations, void_ratios = np.array(every)[window], np.array(every_e)[window]
@@ -433,7 +519,7 @@ def evaluate_drum(scene, times, frames) -> DrumResult:
                       predicted, (float(times[window[0]]), float(times[-1])),
                       float(np.mean(void_ratios)) if has_density else math.nan, critical_void_ratio(scene),
                       scene.material.initial_void_ratio, omega**2 * radius / scene.gravity.magnitude, len(window),
-                      budget, swelling, *creep, depth, u, rigid, list(map(float, times)), every, every_e)
+                      budget, swelling, *creep, faces, depth, u, rigid, list(map(float, times)), every, every_e)
 
 
 def mean_void_ratio(frame, grain_density: float) -> float:
@@ -512,6 +598,9 @@ def check(case, runs, base, args) -> bool:
         print(result.row(), flush=True)
         if result.budget is not None:
             print(result.budget.line(result.predicted_deg), flush=True)
+        if result.faces is not None:
+            print(result.faces.line(result.predicted_deg, result.flowing_depth, 2.0 * BUDGET_SPAN * result.radius),
+                  flush=True)
         if not math.isnan(result.creep_needed):
             print(f"  bed: the law needs |D| = {result.creep_needed:.4f} omega to turn rigidly under its own stress "
                   f"field; its grains deform at {result.creep_measured:.4f} omega (medians)", flush=True)
@@ -536,7 +625,8 @@ def check(case, runs, base, args) -> bool:
                           f"{r.inclination_deg:.1f} deg ({r.inclination_spread_deg:.1f}); {1e3 * r.flowing_depth:.0f} mm; "
                           + ("-" if r.budget is None else f"{r.budget.friction_deg:.1f} deg"),
                           "-" if r.paper is None else f"{r.paper[0]} deg; {1e3 * r.paper[1]:.0f} mm (out of reach)",
-                          f"model's steady slope {r.predicted_deg:.1f} deg",
+                          f"model's steady slope {r.predicted_deg:.1f} deg"
+                          + ("" if r.faces is None else f"; with the law's faces {r.faces_slope_deg():.1f} deg"),
                           res, run_cost, "transient" if r.loose_start else ("PASS" if r.passed() else "FAIL"))
                       for r, (res, run_cost) in zip(results, where)])
     return ok
