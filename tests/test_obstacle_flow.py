@@ -77,3 +77,40 @@ def test_no_shock_and_open_wake_when_the_flow_ignores_the_obstacle():
                                                       lambda s, y: (s >= 0.385) & (np.abs(y) < 0.015)), 1.0)
     assert not frame.shock and frame.depth_jump == pytest.approx(1.0, abs=0.1)
     assert not frame.wake_closed
+
+
+def wedge_scene():
+    return scene_from_dict({
+        "name": "wedge_case", "dimension": 3,
+        "domain": {"lower": [-0.1, -0.2, -0.5], "upper": [0.7, 0.2, 0.1]},
+        "material": {"model": "elastoplastic", "density": 1500.0, "youngs_modulus": 5e6, "poisson_ratio": 0.3,
+                     "friction_angle_deg": 26.0},
+        "particles": [{"lower": [0.02, -0.1, 0.0], "upper": [0.08, 0.1, 0.03], "origin": [0.0, 0.0, 0.0],
+                       "tilt_deg": 36.0}],
+        "obstacles": [{"name": "chute", "shape": "chute", "tilt_deg": 36.0, "width": 0.3,
+                       "segments": [{"length": 0.7, "slope_deg": 36.0}]},
+                      {"name": "wedge", "shape": "wedge", "tilt_deg": 36.0, "length": 0.05, "width": 0.04,
+                       "height": 0.05, "origin": to_global(np.array([[0.4, 0.0, 0.0]]), None, 36.0)[0].tolist()}],
+        "numerics": {"particle_spacing": DP},
+        "run": {"end_time": 1.0, "output_interval": 0.1},
+    })
+
+
+def test_oblique_shocks_along_a_wedges_faces_are_measured():
+    """A 10 mm layer raised to 30 mm between the faces of a wedge (half-angle 21.8 deg, tip at
+    s = 0.4 m, 50 mm long) and lines from its tip at 40 deg to the chute's axis: the measure returns
+    the shock's angle within 4 deg (cells of 7.5 mm over a 50 mm wedge) and the jump of 3; a layer
+    that ignores the wedge has no raised layer (NaN) and no jump."""
+    scene = wedge_scene()
+    assert math.degrees(of.obstacle_geometry(scene).half_angle) == pytest.approx(21.8, abs=0.05)
+    inside = lambda s, y: (s >= 0.4) & (s <= 0.45) & (np.abs(y) < (s - 0.4) * 0.4)  # noqa: E731 (tan 21.8 deg)
+
+    def depth(s, y):
+        return 0.030 if 0.4 <= s <= 0.45 and abs(y) < (s - 0.4) * math.tan(math.radians(40.0)) else 0.010
+
+    frame = of.measure_flow_frame(scene, layer_frame(depth, inside), 1.0)
+    assert frame.upstream_depth == pytest.approx(0.010, abs=DP)
+    assert frame.oblique_angle_deg == pytest.approx(40.0, abs=4.0)
+    assert frame.oblique_jump == pytest.approx(3.0, rel=0.2)
+    flat = of.measure_flow_frame(scene, layer_frame(lambda s, y: 0.010, inside), 1.0)
+    assert math.isnan(flat.oblique_angle_deg) and math.isnan(flat.oblique_jump)

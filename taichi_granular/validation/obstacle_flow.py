@@ -14,7 +14,12 @@ with the material particles' height above the bed:
   neighbours) to the cell just behind its rear s_b on the centre line; its length (furthest
   s - s_b) and area; it is closed when it touches neither the chute's end nor its sides;
 - protected zone (wedge): the number of material particles in the box behind the rear,
-  ``PROTECTED_LENGTH`` long and as wide as the obstacle.
+  ``PROTECTED_LENGTH`` long and as wide as the obstacle;
+- oblique shocks (wedge): in each row of cells across the chute between the tip and the rear, the
+  raised layer along each face runs outward from the face to the first cell shallower than
+  ``OBLIQUE_THRESHOLD`` h_0; its outer edge |y| against the distance from the tip, fitted by a
+  line through the tip, gives the shock's angle to the chute's axis (above the wedge's half-angle
+  where a shock stands off the face), and the raised layer's mean depth over h_0 its depth jump.
 A bow shock "appears" when the depth jump exceeds SHOCK_JUMP; steady state is the last
 ``STEADY_FRACTION`` of the frames, over which shock and closed wake must hold in every frame.
 
@@ -22,6 +27,7 @@ Units: m, m^2, s.
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import Dict, List, Sequence
 
@@ -36,6 +42,7 @@ SHOCK_JUMP = 1.5  # h_1/h_0 above which the frame has a bow shock
 STEADY_FRACTION = 0.3  # the last 30 % of the frames make the steady state
 PROTECTED_LENGTH = 0.10  # [m] behind the rear that the wedge protects (our choice)
 CELL_FACTOR = 1.5  # grid cell = 1.5 dp: a lattice of particles leaves no empty cell
+OBLIQUE_THRESHOLD = 0.5 * (1.0 + SHOCK_JUMP)  # of h_0: the raised layer along a wedge's face ends below this
 
 
 @dataclass
@@ -43,6 +50,7 @@ class ObstacleGeometry:
     front: float  # s of the face the flow meets [m]
     rear: float  # s of the rear of the obstacle (of the building behind a wedge) [m]
     width: float  # extent across the chute [m]
+    half_angle: float = float("nan")  # a wedge's half-angle at its tip, atan(width / (2 length)) [rad]
 
 
 def obstacle_geometry(scene: Scene) -> ObstacleGeometry:
@@ -60,7 +68,8 @@ def obstacle_geometry(scene: Scene) -> ObstacleGeometry:
     for box in scene.obstacles:  # a building laid in the wedge's own frame, right behind it
         if isinstance(box, BoxObstacle) and box.origin == solid.origin and box.tilt_deg == solid.tilt_deg:
             rear = max(rear, box.upper[0])
-    return ObstacleGeometry(front=s0, rear=s0 + rear, width=solid.width)
+    return ObstacleGeometry(front=s0, rear=s0 + rear, width=solid.width,
+                            half_angle=math.atan(0.5 * solid.width / solid.length))
 
 
 @dataclass
@@ -73,6 +82,8 @@ class FlowFrame:
     wake_area: float  # [m^2]
     wake_closed: bool
     protected_particles: int
+    oblique_angle_deg: float = float("nan")  # the wedge's oblique shocks' angle to the chute's axis
+    oblique_jump: float = float("nan")  # the raised layer's mean depth along the faces over h_0
 
     @property
     def depth_jump(self) -> float:
@@ -115,6 +126,31 @@ def bow_shock(s_centres: np.ndarray, centre_depth: np.ndarray, front: float, wid
     if run_start is not None:
         standoff = float(front - s_centres[run_start])
     return h0, h1, standoff
+
+
+def oblique_shocks(s_centres: np.ndarray, y_centres: np.ndarray, depth: np.ndarray, h0: float, tip: float,
+                   length: float, half_angle: float):
+    """(angle to the chute's axis [deg], depth jump [-]) of the raised layers along a wedge's two
+    faces, fitted together (module docstring); NaN where no row has a raised layer."""
+    cell = s_centres[1] - s_centres[0]
+    threshold = OBLIQUE_THRESHOLD * h0
+    along, edges, raised = [], [], []
+    for i in np.nonzero((s_centres > tip + 2.0 * cell) & (s_centres < tip + length))[0]:
+        face = (s_centres[i] - tip) * math.tan(half_angle)
+        for side in (1.0, -1.0):
+            outward = np.nonzero(side * y_centres > face)[0]
+            order = outward[np.argsort(side * y_centres[outward])]
+            shallow = np.nonzero(depth[i, order] < threshold)[0]
+            width = int(shallow[0]) if len(shallow) else len(order)
+            if width == 0:
+                continue
+            along.append(s_centres[i] - tip)
+            edges.append(abs(y_centres[order[width - 1]]) + 0.5 * cell)
+            raised.extend(depth[i, order[:width]])
+    if not along or not h0 > 0.0:
+        return float("nan"), float("nan")
+    along, edges = np.array(along), np.array(edges)
+    return math.degrees(math.atan(float(along @ edges) / float(along @ along))), float(np.mean(raised)) / h0
 
 
 def empty_region(count: np.ndarray, start) -> np.ndarray:
@@ -160,9 +196,13 @@ def measure_flow_frame(scene: Scene, frame: Dict[str, np.ndarray], time: float) 
     length = float(s_centres[wake.any(axis=1)].max() - geo.rear + 0.5 * cell) if wake.any() else 0.0
     closed = bool(wake.any() and not wake[-1, :].any() and not wake[:, 0].any() and not wake[:, -1].any())
     behind = (s >= geo.rear) & (s < geo.rear + PROTECTED_LENGTH) & (np.abs(y) < 0.5 * geo.width)
+    oblique = (float("nan"), float("nan"))
+    if not math.isnan(geo.half_angle):
+        oblique = oblique_shocks(s_centres, y_centres, depth, h0, geo.front, 0.5 * geo.width / math.tan(geo.half_angle),
+                                 geo.half_angle)
     return FlowFrame(time=time, upstream_depth=h0, peak_depth=h1, standoff=standoff, wake_length=length,
                      wake_area=float(wake.sum() * cell * cell), wake_closed=closed,
-                     protected_particles=int(behind.sum()))
+                     protected_particles=int(behind.sum()), oblique_angle_deg=oblique[0], oblique_jump=oblique[1])
 
 
 @dataclass
@@ -196,11 +236,12 @@ class ObstacleFlowResult:
                 f"{1e3 * self.mean('standoff'):8.1f} {1e3 * self.mean('wake_length'):8.1f} "
                 f"{1e4 * self.mean('wake_area'):8.1f} {'yes' if self.shock_persists else 'no':>6s} "
                 f"{'yes' if self.wake_persists else 'no':>6s} {self.protected_max:6d} "
-                f"{self.steady[0].time:6.2f} {self.frames[-1].time:6.2f}")
+                f"{self.steady[0].time:6.2f} {self.frames[-1].time:6.2f} {self.mean('oblique_angle_deg'):8.1f} "
+                f"{self.mean('oblique_jump'):6.2f}")
 
 
 HEADER = (f"{'case':24s} {'h0 mm':>7s} {'jump':>6s} {'stand mm':>8s} {'wake mm':>8s} {'wake cm2':>8s} "
-          f"{'shock':>6s} {'closed':>6s} {'inside':>6s} {'from s':>6s} {'end s':>6s}")
+          f"{'shock':>6s} {'closed':>6s} {'inside':>6s} {'from s':>6s} {'end s':>6s} {'obl. deg':>8s} {'jump':>6s}")
 
 
 def evaluate_obstacle_flow(scene: Scene, times: Sequence[float], frames: Sequence[Dict[str, np.ndarray]]
@@ -223,15 +264,18 @@ def check(case, runs, base, args) -> bool:
     for scene, out, times, frames in runs:
         result = evaluate_obstacle_flow(scene, times, frames)
         atomic_write_text(out / "obstacle_flow.csv", "t,upstream_depth_m,depth_jump,standoff_m,wake_length_m,"
-                          "wake_area_m2,wake_closed,protected_particles\n" + "".join(
+                          "wake_area_m2,wake_closed,protected_particles,oblique_angle_deg,oblique_jump\n" + "".join(
                               f"{f.time:.4f},{f.upstream_depth:.5f},{f.depth_jump:.3f},{f.standoff:.5f},"
-                              f"{f.wake_length:.5f},{f.wake_area:.6f},{int(f.wake_closed)},{f.protected_particles}\n"
+                              f"{f.wake_length:.5f},{f.wake_area:.6f},{int(f.wake_closed)},{f.protected_particles},"
+                              f"{f.oblique_angle_deg:.2f},{f.oblique_jump:.3f}\n"
                               for f in result.frames))
         print(result.row(), flush=True)
         if "wedge" in scene.name:
             passed = result.shock_persists and result.protected_max == 0
-            measure, ours = "bow shock; protected zone empty", (f"{'yes' if result.shock_persists else 'no'}; "
-                                                              f"{result.protected_max} particles inside")
+            measure = "bow shock; protected zone empty; oblique shocks (angle to the axis, depth jump)"
+            ours = (f"{'yes' if result.shock_persists else 'no'}; {result.protected_max} particles inside; "
+                    f"{result.mean('oblique_angle_deg'):.1f} deg (wedge "
+                    f"{math.degrees(obstacle_geometry(scene).half_angle):.1f}), {result.mean('oblique_jump'):.2f}")
             reference = "Tai et al. (2001) experiment: shock, empty zone"
         else:
             passed = result.shock_persists and result.wake_persists
