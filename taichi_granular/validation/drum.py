@@ -41,6 +41,12 @@ together) without that density changing, the fill occupies more (less) of the dr
 grains' volumes say, the surface rises (sinks) and every measure above shifts with it
 (docs/models/hypoplastic.md, "The fill swells").
 
+The faces against the law: at the budget's two faces, the layer's along-surface shortening per
+unit shear (from the grains' velocity gradient) and its measured sigma_tt/sigma_nn, beside the
+ratio that a single point of the rate law carries in its stationary state under that strain
+(``FaceStates``); with the law's ratios the balance gives the slope the drum's along-surface
+strain adds to the plane relation's.
+
 The bed's creep: the strain rate the rate law needs for the bed to turn rigidly under its own
 window-averaged stress field, steady in the lab, against the strain rate its grains have
 (``bed_creep``); where the grains deform far more than the law asks, the bed's departure from
@@ -340,18 +346,23 @@ class FaceStates:
                 f"drum's along-surface strain adds)")
 
 
+def _rate_law(scene):
+    """The scene's hypoplastic rate law, for point integrations (Taichi started if it is not)."""
+    from .. import runtime
+    from ..physics.rheology.hypoplastic.model import HypoplasticBagnold
+    runtime.ensure(scene.precision)
+    return HypoplasticBagnold.from_scene(scene)
+
+
 def face_states(scene, frames, window, centre, radius, spacing, depth, lines):
     """``FaceStates`` over the window (None for frames without velocity gradients or stresses)."""
-    from ..physics.rheology.hypoplastic.model import HypoplasticBagnold
     from .element_tests import along_slope_friction
     if math.isnan(depth) or not all(name in frames[k] for k in window for name in FACE_FIELDS):
         return None
     sums = np.sum([face_sums(frames[k], centre, radius, spacing, slope, intercept, depth)
                    for k, (slope, intercept) in zip(window, lines)], axis=0).reshape(2, 4)
     strain = -sums[:, 0] / sums[:, 1]
-    from .. import runtime
-    runtime.ensure(scene.precision)
-    model = HypoplasticBagnold.from_scene(scene)
+    model = _rate_law(scene)
     law = []
     for c in strain:
         try:
@@ -400,7 +411,6 @@ def bed_creep(scene, frames, window, centre, radius, spacing, omega, flowing_dep
     the flowing depth + 2 dp and 1.5 dp off the wall, solved for the plane strain rate D that
     gives it (element_tests.plane_strain_rate_for). The grains': |D| of their SPH velocity
     gradient in the same cells. NaN for frames without stresses (synthetic ones)."""
-    from ..physics.rheology.hypoplastic.model import HypoplasticBagnold
     from .element_tests import RateProbe, plane_strain_rate_for
     if math.isnan(flowing_depth) or not all(name in frames[k] for k in window for name in CREEP_FIELDS):
         return math.nan, math.nan
@@ -429,9 +439,7 @@ def bed_creep(scene, frames, window, centre, radius, spacing, omega, flowing_dep
         (np.hypot(X, Y) < radius - 1.5 * spacing)
     inner = np.zeros_like(bed)
     inner[1:-1, 1:-1] = bed[1:-1, 1:-1] & bed[:-2, 1:-1] & bed[2:, 1:-1] & bed[1:-1, :-2] & bed[1:-1, 2:]
-    from .. import runtime
-    runtime.ensure(scene.precision)
-    probe = RateProbe(HypoplasticBagnold.from_scene(scene))
+    probe = RateProbe(_rate_law(scene))
     spin = np.array([[0.0, -omega, 0.0], [omega, 0.0, 0.0], [0.0, 0.0, 0.0]])
     needed = []
     for a, b in zip(*np.nonzero(inner)):
