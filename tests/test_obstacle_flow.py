@@ -12,9 +12,11 @@ from taichi_granular.validation import obstacle_flow as of
 DP = 0.005
 
 
-def cylinder_scene():
+def chute_scene(name, solid):
+    """A 36 deg chute 0.3 m wide with ``solid`` (an obstacle's keys, placed in the chute's frame at
+    s = 0.4 m on its centre line)."""
     return scene_from_dict({
-        "name": "cylinder_case", "dimension": 3,
+        "name": name, "dimension": 3,
         "domain": {"lower": [-0.1, -0.2, -0.5], "upper": [0.7, 0.2, 0.1]},
         "material": {"model": "elastoplastic", "density": 1500.0, "youngs_modulus": 5e6, "poisson_ratio": 0.3,
                      "friction_angle_deg": 26.0},
@@ -22,11 +24,19 @@ def cylinder_scene():
                        "tilt_deg": 36.0}],
         "obstacles": [{"name": "chute", "shape": "chute", "tilt_deg": 36.0, "width": 0.3,
                        "segments": [{"length": 0.7, "slope_deg": 36.0}]},
-                      {"name": "cylinder", "shape": "cylinder", "tilt_deg": 36.0, "radius": 0.015, "height": 0.05,
-                       "origin": to_global(np.array([[0.4, 0.0, 0.0]]), None, 36.0)[0].tolist()}],
+                      dict(solid, tilt_deg=36.0, origin=to_global(np.array([[0.4, 0.0, 0.0]]), None, 36.0)[0].tolist())],
         "numerics": {"particle_spacing": DP},
         "run": {"end_time": 1.0, "output_interval": 0.1},
     })
+
+
+def cylinder_scene():
+    return chute_scene("cylinder_case", {"name": "cylinder", "shape": "cylinder", "radius": 0.015, "height": 0.05})
+
+
+def wedge_scene():
+    return chute_scene("wedge_case", {"name": "wedge", "shape": "wedge", "length": 0.05, "width": 0.04,
+                                      "height": 0.05})
 
 
 def layer_frame(depth_of, empty_of):
@@ -77,23 +87,6 @@ def test_no_shock_and_open_wake_when_the_flow_ignores_the_obstacle():
                                                       lambda s, y: (s >= 0.385) & (np.abs(y) < 0.015)), 1.0)
     assert not frame.shock and frame.depth_jump == pytest.approx(1.0, abs=0.1)
     assert not frame.wake_closed
-
-
-def wedge_scene():
-    return scene_from_dict({
-        "name": "wedge_case", "dimension": 3,
-        "domain": {"lower": [-0.1, -0.2, -0.5], "upper": [0.7, 0.2, 0.1]},
-        "material": {"model": "elastoplastic", "density": 1500.0, "youngs_modulus": 5e6, "poisson_ratio": 0.3,
-                     "friction_angle_deg": 26.0},
-        "particles": [{"lower": [0.02, -0.1, 0.0], "upper": [0.08, 0.1, 0.03], "origin": [0.0, 0.0, 0.0],
-                       "tilt_deg": 36.0}],
-        "obstacles": [{"name": "chute", "shape": "chute", "tilt_deg": 36.0, "width": 0.3,
-                       "segments": [{"length": 0.7, "slope_deg": 36.0}]},
-                      {"name": "wedge", "shape": "wedge", "tilt_deg": 36.0, "length": 0.05, "width": 0.04,
-                       "height": 0.05, "origin": to_global(np.array([[0.4, 0.0, 0.0]]), None, 36.0)[0].tolist()}],
-        "numerics": {"particle_spacing": DP},
-        "run": {"end_time": 1.0, "output_interval": 0.1},
-    })
 
 
 def test_oblique_shocks_along_a_wedges_faces_are_measured():
