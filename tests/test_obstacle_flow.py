@@ -24,7 +24,8 @@ def chute_scene(name, solid):
                        "tilt_deg": 36.0}],
         "obstacles": [{"name": "chute", "shape": "chute", "tilt_deg": 36.0, "width": 0.3,
                        "segments": [{"length": 0.7, "slope_deg": 36.0}]},
-                      dict(solid, tilt_deg=36.0, origin=to_global(np.array([[0.4, 0.0, 0.0]]), None, 36.0)[0].tolist())],
+                      dict(solid, tilt_deg=36.0,
+                           origin=to_global(np.array([[0.4, 0.0, 0.0]]), None, 36.0)[0].tolist())],
         "numerics": {"particle_spacing": DP},
         "run": {"end_time": 1.0, "output_interval": 0.1},
     })
@@ -91,9 +92,10 @@ def test_no_shock_and_open_wake_when_the_flow_ignores_the_obstacle():
 
 def test_oblique_shocks_along_a_wedges_faces_are_measured():
     """A 10 mm layer raised to 30 mm between the faces of a wedge (half-angle 21.8 deg, tip at
-    s = 0.4 m, 50 mm long) and lines from its tip at 40 deg to the chute's axis: the measure returns
-    the shock's angle within 4 deg (cells of 7.5 mm over a 50 mm wedge) and the jump of 3; a layer
-    that ignores the wedge has no raised layer (NaN) and no jump."""
+    s = 0.4 m, 50 mm long) and lines from its tip at 40 deg to the chute's axis, read on the depth
+    averaged over the steady frames: the shock's angle within 4 deg (cells of 7.5 mm over a 50 mm
+    wedge) and the jump of 3, also for a sparse sheet whose frames each hold a quarter of its
+    columns; a layer that ignores the wedge has no raised layer (NaN)."""
     scene = wedge_scene()
     assert math.degrees(of.obstacle_geometry(scene).half_angle) == pytest.approx(21.8, abs=0.05)
     inside = lambda s, y: (s >= 0.4) & (s <= 0.45) & (np.abs(y) < (s - 0.4) * 0.4)  # noqa: E731 (tan 21.8 deg)
@@ -101,9 +103,17 @@ def test_oblique_shocks_along_a_wedges_faces_are_measured():
     def depth(s, y):
         return 0.030 if 0.4 <= s <= 0.45 and abs(y) < (s - 0.4) * math.tan(math.radians(40.0)) else 0.010
 
-    frame = of.measure_flow_frame(scene, layer_frame(depth, inside), 1.0)
-    assert frame.upstream_depth == pytest.approx(0.010, abs=DP)
-    assert frame.oblique_angle_deg == pytest.approx(40.0, abs=4.0)
-    assert frame.oblique_jump == pytest.approx(3.0, rel=0.2)
-    flat = of.measure_flow_frame(scene, layer_frame(lambda s, y: 0.010, inside), 1.0)
-    assert math.isnan(flat.oblique_angle_deg) and math.isnan(flat.oblique_jump)
+    frame = layer_frame(depth, inside)
+    result = of.evaluate_obstacle_flow(scene, [0.9, 1.0], [frame, frame])
+    assert result.mean("upstream_depth") == pytest.approx(0.010, abs=DP)
+    angle, jump = result.oblique()
+    assert angle == pytest.approx(40.0, abs=4.0)
+    assert jump == pytest.approx(3.0, rel=0.2)
+    # a sparse sheet: each frame keeps every fourth lattice column, in turn (cells of 1.5 DP hold none
+    # or one), so no frame has the layers whole; the steady window (the last 4 of 12) has them all
+    sparse = [layer_frame(depth, lambda s, y, k=k: inside(s, y) | ((np.round(s / DP) + 2 * np.round(y / DP)) % 4 != k))
+              for k in range(4)] * 3
+    angle, jump = of.evaluate_obstacle_flow(scene, np.arange(12) * 0.1, sparse).oblique()
+    assert angle == pytest.approx(40.0, abs=4.0) and jump == pytest.approx(3.0, rel=0.2)
+    flat = layer_frame(lambda s, y: 0.010, inside)
+    assert all(math.isnan(v) for v in of.evaluate_obstacle_flow(scene, [0.9, 1.0], [flat, flat]).oblique())

@@ -15,11 +15,13 @@ with the material particles' height above the bed:
   s - s_b) and area; it is closed when it touches neither the chute's end nor its sides;
 - protected zone (wedge): the number of material particles in the box behind the rear,
   ``PROTECTED_LENGTH`` long and as wide as the obstacle;
-- oblique shocks (wedge): in each row of cells across the chute between the tip and the rear, the
-  raised layer along each face runs outward from the face to the first cell shallower than
-  ``OBLIQUE_THRESHOLD`` h_0; its outer edge |y| against the distance from the tip, fitted by a
-  line through the tip, gives the shock's angle to the chute's axis (above the wedge's half-angle
-  where a shock stands off the face), and the raised layer's mean depth over h_0 its depth jump.
+- oblique shocks (wedge), on the depth averaged over the steady frames (a sheet one or two
+  grains deep leaves single cells empty in any one frame): in each row of cells across the chute
+  between the tip and the rear, the raised layer along each face runs outward from the face to
+  the first cell shallower than ``OBLIQUE_THRESHOLD`` h_0 (h_0 averaged alike); its outer edge |y|
+  against the distance from the tip, fitted by a line through the tip, gives the shock's angle to
+  the chute's axis (above the wedge's half-angle where a shock stands off the face), and the
+  raised layer's mean depth over h_0 its depth jump.
 A bow shock "appears" when the depth jump exceeds SHOCK_JUMP; steady state is the last
 ``STEADY_FRACTION`` of the frames, over which shock and closed wake must hold in every frame.
 
@@ -82,8 +84,7 @@ class FlowFrame:
     wake_area: float  # [m^2]
     wake_closed: bool
     protected_particles: int
-    oblique_angle_deg: float = float("nan")  # the wedge's oblique shocks' angle to the chute's axis
-    oblique_jump: float = float("nan")  # the raised layer's mean depth along the faces over h_0
+    depth: np.ndarray = field(repr=False, default=None)  # flow depth per cell of ``flow_grid`` [m]
 
     @property
     def depth_jump(self) -> float:
@@ -170,6 +171,15 @@ def empty_region(count: np.ndarray, start) -> np.ndarray:
     return region
 
 
+def flow_grid(scene: Scene):
+    """(s edges, y edges) of the grid of cells over the chute's bed  [m]."""
+    chute = obstacle_of(scene, ChuteObstacle)
+    cell = CELL_FACTOR * scene.numerics.particle_spacing
+    half = 0.5 * chute.width
+    s_end = float(sum(seg.length for seg in chute.segments))
+    return np.arange(0.0, s_end + cell, cell), np.linspace(-half, half, int(round(chute.width / cell)) + 1)
+
+
 def measure_flow_frame(scene: Scene, frame: Dict[str, np.ndarray], time: float) -> FlowFrame:
     chute = obstacle_of(scene, ChuteObstacle)
     geo = obstacle_geometry(scene)
@@ -180,10 +190,7 @@ def measure_flow_frame(scene: Scene, frame: Dict[str, np.ndarray], time: float) 
     keep = ~left_domain(frame, n)
     s, height = along_chute(chute, x[keep])
     y = x[keep, 1]
-    half = 0.5 * chute.width
-    s_end = float(sum(seg.length for seg in chute.segments))
-    s_edges = np.arange(0.0, s_end + cell, cell)
-    y_edges = np.linspace(-half, half, int(round(chute.width / cell)) + 1)
+    s_edges, y_edges = flow_grid(scene)
     count, depth = depth_grid(s, y, height + 0.5 * dp, s_edges, y_edges)
     s_centres = 0.5 * (s_edges[1:] + s_edges[:-1])
     y_centres = 0.5 * (y_edges[1:] + y_edges[:-1])
@@ -196,19 +203,17 @@ def measure_flow_frame(scene: Scene, frame: Dict[str, np.ndarray], time: float) 
     length = float(s_centres[wake.any(axis=1)].max() - geo.rear + 0.5 * cell) if wake.any() else 0.0
     closed = bool(wake.any() and not wake[-1, :].any() and not wake[:, 0].any() and not wake[:, -1].any())
     behind = (s >= geo.rear) & (s < geo.rear + PROTECTED_LENGTH) & (np.abs(y) < 0.5 * geo.width)
-    oblique = (float("nan"), float("nan"))
-    if not math.isnan(geo.half_angle):
-        oblique = oblique_shocks(s_centres, y_centres, depth, h0, geo.front, 0.5 * geo.width / math.tan(geo.half_angle),
-                                 geo.half_angle)
     return FlowFrame(time=time, upstream_depth=h0, peak_depth=h1, standoff=standoff, wake_length=length,
                      wake_area=float(wake.sum() * cell * cell), wake_closed=closed,
-                     protected_particles=int(behind.sum()), oblique_angle_deg=oblique[0], oblique_jump=oblique[1])
+                     protected_particles=int(behind.sum()), depth=depth)
 
 
 @dataclass
 class ObstacleFlowResult:
     name: str
     frames: List[FlowFrame] = field(default_factory=list)
+    geometry: ObstacleGeometry = None
+    grid: tuple = None  # flow_grid's (s edges, y edges)
 
     @property
     def steady(self) -> List[FlowFrame]:
@@ -231,13 +236,24 @@ class ObstacleFlowResult:
     def protected_max(self) -> int:
         return max(f.protected_particles for f in self.steady)
 
+    def oblique(self):
+        """(angle to the chute's axis [deg], depth jump [-]) of a wedge's oblique shocks on the depth
+        averaged over the steady frames (module docstring); NaN for a cylinder or without a raised layer."""
+        geo = self.geometry
+        if geo is None or math.isnan(geo.half_angle):
+            return float("nan"), float("nan")
+        s_edges, y_edges = self.grid
+        return oblique_shocks(0.5 * (s_edges[1:] + s_edges[:-1]), 0.5 * (y_edges[1:] + y_edges[:-1]),
+                              np.mean([f.depth for f in self.steady], axis=0), self.mean("upstream_depth"),
+                              geo.front, 0.5 * geo.width / math.tan(geo.half_angle), geo.half_angle)
+
     def row(self) -> str:
         return (f"{self.name:24s} {1e3 * self.mean('upstream_depth'):7.1f} {self.mean('depth_jump'):6.2f} "
                 f"{1e3 * self.mean('standoff'):8.1f} {1e3 * self.mean('wake_length'):8.1f} "
                 f"{1e4 * self.mean('wake_area'):8.1f} {'yes' if self.shock_persists else 'no':>6s} "
                 f"{'yes' if self.wake_persists else 'no':>6s} {self.protected_max:6d} "
-                f"{self.steady[0].time:6.2f} {self.frames[-1].time:6.2f} {self.mean('oblique_angle_deg'):8.1f} "
-                f"{self.mean('oblique_jump'):6.2f}")
+                f"{self.steady[0].time:6.2f} {self.frames[-1].time:6.2f} {self.oblique()[0]:8.1f} "
+                f"{self.oblique()[1]:6.2f}")
 
 
 HEADER = (f"{'case':24s} {'h0 mm':>7s} {'jump':>6s} {'stand mm':>8s} {'wake mm':>8s} {'wake cm2':>8s} "
@@ -247,7 +263,8 @@ HEADER = (f"{'case':24s} {'h0 mm':>7s} {'jump':>6s} {'stand mm':>8s} {'wake mm':
 def evaluate_obstacle_flow(scene: Scene, times: Sequence[float], frames: Sequence[Dict[str, np.ndarray]]
                            ) -> ObstacleFlowResult:
     return ObstacleFlowResult(name=scene.name,
-                              frames=[measure_flow_frame(scene, f, t) for t, f in zip(times, frames)])
+                              frames=[measure_flow_frame(scene, f, t) for t, f in zip(times, frames)],
+                              geometry=obstacle_geometry(scene), grid=flow_grid(scene))
 
 
 # ---- the validate command's case (validation/__init__.py CASES) -------------------------------
@@ -264,18 +281,17 @@ def check(case, runs, base, args) -> bool:
     for scene, out, times, frames in runs:
         result = evaluate_obstacle_flow(scene, times, frames)
         atomic_write_text(out / "obstacle_flow.csv", "t,upstream_depth_m,depth_jump,standoff_m,wake_length_m,"
-                          "wake_area_m2,wake_closed,protected_particles,oblique_angle_deg,oblique_jump\n" + "".join(
+                          "wake_area_m2,wake_closed,protected_particles\n" + "".join(
                               f"{f.time:.4f},{f.upstream_depth:.5f},{f.depth_jump:.3f},{f.standoff:.5f},"
-                              f"{f.wake_length:.5f},{f.wake_area:.6f},{int(f.wake_closed)},{f.protected_particles},"
-                              f"{f.oblique_angle_deg:.2f},{f.oblique_jump:.3f}\n"
+                              f"{f.wake_length:.5f},{f.wake_area:.6f},{int(f.wake_closed)},{f.protected_particles}\n"
                               for f in result.frames))
         print(result.row(), flush=True)
         if "wedge" in scene.name:
             passed = result.shock_persists and result.protected_max == 0
             measure = "bow shock; protected zone empty; oblique shocks (angle to the axis, depth jump)"
+            angle, jump = result.oblique()
             ours = (f"{'yes' if result.shock_persists else 'no'}; {result.protected_max} particles inside; "
-                    f"{result.mean('oblique_angle_deg'):.1f} deg (wedge "
-                    f"{math.degrees(obstacle_geometry(scene).half_angle):.1f}), {result.mean('oblique_jump'):.2f}")
+                    f"{angle:.1f} deg (wedge {math.degrees(result.geometry.half_angle):.1f}), {jump:.2f}")
             reference = "Tai et al. (2001) experiment: shock, empty zone"
         else:
             passed = result.shock_persists and result.wake_persists
