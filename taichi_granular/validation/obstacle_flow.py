@@ -286,21 +286,25 @@ def check(case, runs, base, args) -> bool:
                               f"{f.wake_length:.5f},{f.wake_area:.6f},{int(f.wake_closed)},{f.protected_particles}\n"
                               for f in result.frames))
         print(result.row(), flush=True)
+        where = (resolution(scene, frames, out), cost(out))
         if "wedge" in scene.name:
             passed = result.shock_persists and result.protected_max == 0
-            measure = "bow shock; protected zone empty; oblique shocks (angle to the axis, depth jump)"
-            angle, jump = result.oblique()
-            ours = (f"{'yes' if result.shock_persists else 'no'}; {result.protected_max} particles inside; "
-                    f"{angle:.1f} deg (wedge {math.degrees(result.geometry.half_angle):.1f}), {jump:.2f}")
+            measure, ours = "bow shock; protected zone empty", (f"{'yes' if result.shock_persists else 'no'}; "
+                                                              f"{result.protected_max} particles inside")
             reference = "Tai et al. (2001) experiment: shock, empty zone"
+            angle, jump = result.oblique()
+            reported = [Row(f"{case.name}: {scene.name}", "oblique shocks: angle to the chute's axis (the wedge's "
+                            "half-angle); depth jump", f"{angle:.1f} deg ({math.degrees(result.geometry.half_angle):.1f});"
+                            f" {jump:.2f}", "-", "Tai et al. (2001) experiment: oblique shocks", *where, "reported")]
         else:
+            reported = []
             passed = result.shock_persists and result.wake_persists
             measure, ours = "bow shock; closed wake", (f"{'yes' if result.shock_persists else 'no'}; "
                                                        f"{'yes' if result.wake_persists else 'no'}")
             reference = "Cui & Gray (2013) experiment: shock, closed wake"
         ok &= passed
-        rows.append(Row(f"{case.name}: {scene.name}", measure, ours, "-", reference, resolution(scene, frames, out),
-                        cost(out), "PASS" if passed else "FAIL"))
+        rows += [Row(f"{case.name}: {scene.name}", measure, ours, "-", reference, *where,
+                     "PASS" if passed else "FAIL")] + reported
     print(f"steady state: the last {100 * STEADY_FRACTION:.0f} % of the frames; shock: depth jump > "
           f"{SHOCK_JUMP}; wedge: 'inside' counts particles within {PROTECTED_LENGTH} m behind the building")
     print(f"acceptance (cylinder: shock and closed wake persist; wedge: shock persists, protected zone empty): "
