@@ -224,7 +224,7 @@ def test_coarse_drum_rolls_continuously_and_keeps_its_grains():
     (physics/shifting.py SurfaceLayer) the bed settles after the avalanche a little later (bed
     5.8 % over 0.8-1.6 s, 4.1 % over 1.0-2.0, 3.9 % over 1.2-2.4; before 4.4 / 4.7 / 4.5 %,
     measured). The mean inclination (33 deg against the model's 26.3) is reported by validate
-    drum, not asserted here."""
+    drum, not asserted here; what sets it, the faces' along-surface stress, is: the law's own."""
     from taichi_granular.simulation import Simulation
     scene = load_scene(config_path("hypoplastic/drum_omega2_coarse.yaml"), ["run.end_time=2.0"])
     sim = Simulation(scene)
@@ -236,6 +236,9 @@ def test_coarse_drum_rolls_continuously_and_keeps_its_grains():
         times.append(sim.t)
         frames.append({"position": sim.state.position.to_numpy()[:n], "velocity": sim.state.velocity.to_numpy()[:n],
                        "mass": sim.state.mass.to_numpy()[:n], "density": sim.state.density.to_numpy()[:n],
+                       "pressure": sim.state.pressure.to_numpy()[:n],
+                       "deviatoric_stress": sim.state.deviatoric_stress.to_numpy()[:n].reshape(n, 4),
+                       "velocity_gradient": sim.state.velocity_gradient.to_numpy()[:n].reshape(n, 4),
                        "is_wall": np.zeros(n, int)})
     result = drum.evaluate_drum(scene, times, frames)
     assert result.window[0] == pytest.approx(1.0)
@@ -244,6 +247,12 @@ def test_coarse_drum_rolls_continuously_and_keeps_its_grains():
     # the fill swells: its area under the surface grows against its grains' volume (an open defect,
     # docs/models/hypoplastic.md "The fill swells"; measured +8.3 % over 1-2 s): guarded from growing
     assert 0.0 < result.swelling < 0.12
+    # the layer is stretched uphill and shortened downhill, and its faces carry the stress a point of
+    # the rate law carries under that strain (measured: c -0.148 / +0.175, sigma_tt/sigma_nn 0.793 /
+    # 1.451 against the law's 0.750 / 1.386; at dp 5 mm within 0-8 %, docs/models/hypoplastic.md)
+    faces = result.faces
+    assert faces.strain[0] < 0.0 < faces.strain[1] and faces.law_ratio[0] < 1.0 < faces.law_ratio[1]
+    assert faces.ratio == pytest.approx(faces.law_ratio, rel=0.12)
     x = sim.state.position.to_numpy()
     assert np.hypot(x[:n, 0], x[:n, 1]).max() < radius - 0.25 * dp
     c, s = math.cos(omega * sim.t), math.sin(omega * sim.t)
