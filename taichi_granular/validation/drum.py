@@ -336,8 +336,8 @@ class FaceStates:
         up, down = self.law_ratio
         return math.degrees(math.atan(math.tan(math.radians(plane_deg)) + (down - up) * depth / (2.0 * length)))
 
-    def line(self, plane_deg: float, depth: float, length: float) -> str:
-        slope = self.slope_deg(plane_deg, depth, length)
+    def line(self, plane_deg: float, slope: float) -> str:
+        """The printed line, with the plane relation's slope and ``slope_deg``'s  [deg]."""
         return (f"  faces: along-surface shortening per unit shear {self.strain[0]:+.3f} uphill / "
                 f"{self.strain[1]:+.3f} downhill; sigma_tt/sigma_nn {self.ratio[0]:.3f} / {self.ratio[1]:.3f} "
                 f"measured, {self.law_ratio[0]:.3f} / {self.law_ratio[1]:.3f} the law's stationary state at "
@@ -607,8 +607,7 @@ def check(case, runs, base, args) -> bool:
         if result.budget is not None:
             print(result.budget.line(result.predicted_deg), flush=True)
         if result.faces is not None:
-            print(result.faces.line(result.predicted_deg, result.flowing_depth, 2.0 * BUDGET_SPAN * result.radius),
-                  flush=True)
+            print(result.faces.line(result.predicted_deg, result.faces_slope_deg()), flush=True)
         if not math.isnan(result.creep_needed):
             print(f"  bed: the law needs |D| = {result.creep_needed:.4f} omega to turn rigidly under its own stress "
                   f"field; its grains deform at {result.creep_measured:.4f} omega (medians)", flush=True)

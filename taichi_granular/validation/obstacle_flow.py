@@ -52,7 +52,12 @@ class ObstacleGeometry:
     front: float  # s of the face the flow meets [m]
     rear: float  # s of the rear of the obstacle (of the building behind a wedge) [m]
     width: float  # extent across the chute [m]
-    half_angle: float = float("nan")  # a wedge's half-angle at its tip, atan(width / (2 length)) [rad]
+    tip_length: float = float("nan")  # a wedge's tip-to-rear length along the chute (NaN: a cylinder) [m]
+
+    @property
+    def half_angle(self) -> float:
+        """A wedge's half-angle at its tip, atan(width / (2 tip_length))  [rad]."""
+        return math.atan(0.5 * self.width / self.tip_length)
 
 
 def obstacle_geometry(scene: Scene) -> ObstacleGeometry:
@@ -70,8 +75,7 @@ def obstacle_geometry(scene: Scene) -> ObstacleGeometry:
     for box in scene.obstacles:  # a building laid in the wedge's own frame, right behind it
         if isinstance(box, BoxObstacle) and box.origin == solid.origin and box.tilt_deg == solid.tilt_deg:
             rear = max(rear, box.upper[0])
-    return ObstacleGeometry(front=s0, rear=s0 + rear, width=solid.width,
-                            half_angle=math.atan(0.5 * solid.width / solid.length))
+    return ObstacleGeometry(front=s0, rear=s0 + rear, width=solid.width, tip_length=solid.length)
 
 
 @dataclass
@@ -245,15 +249,15 @@ class ObstacleFlowResult:
         s_edges, y_edges = self.grid
         return oblique_shocks(0.5 * (s_edges[1:] + s_edges[:-1]), 0.5 * (y_edges[1:] + y_edges[:-1]),
                               np.mean([f.depth for f in self.steady], axis=0), self.mean("upstream_depth"),
-                              geo.front, 0.5 * geo.width / math.tan(geo.half_angle), geo.half_angle)
+                              geo.front, geo.tip_length, geo.half_angle)
 
     def row(self) -> str:
+        angle, jump = self.oblique()
         return (f"{self.name:24s} {1e3 * self.mean('upstream_depth'):7.1f} {self.mean('depth_jump'):6.2f} "
                 f"{1e3 * self.mean('standoff'):8.1f} {1e3 * self.mean('wake_length'):8.1f} "
                 f"{1e4 * self.mean('wake_area'):8.1f} {'yes' if self.shock_persists else 'no':>6s} "
                 f"{'yes' if self.wake_persists else 'no':>6s} {self.protected_max:6d} "
-                f"{self.steady[0].time:6.2f} {self.frames[-1].time:6.2f} {self.oblique()[0]:8.1f} "
-                f"{self.oblique()[1]:6.2f}")
+                f"{self.steady[0].time:6.2f} {self.frames[-1].time:6.2f} {angle:8.1f} {jump:6.2f}")
 
 
 HEADER = (f"{'case':24s} {'h0 mm':>7s} {'jump':>6s} {'stand mm':>8s} {'wake mm':>8s} {'wake cm2':>8s} "
