@@ -54,7 +54,8 @@ def cmd_resume(args) -> int:
     sim.resume()
     print(f"{scene.name}: resumed at t = {sim.t:.6g} s, step {sim.step_count}; output -> {out}")
     summary = sim.run(end_time=args.end_time)
-    print(f"done: t = {summary.time:.4g} s in {summary.steps} more steps, {summary.wall_seconds:.1f} s wall, "
+    whole = "" if summary.total_wall_seconds is None else f" ({summary.total_wall_seconds:.1f} s over the whole run)"
+    print(f"done: t = {summary.time:.4g} s in {summary.steps} more steps, {summary.wall_seconds:.1f} s wall{whole}, "
           f"{summary.particle_steps_per_second:.3g} particle-steps/s, {summary.frames} frames")
     return 0
 

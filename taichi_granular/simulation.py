@@ -60,10 +60,11 @@ class _Interrupt:
 class RunSummary:
     steps: int
     time: float
-    wall_seconds: float
+    wall_seconds: float  # this call's stepping
     frames: int
     particle_steps_per_second: float
     out_dir: Optional[Path]
+    total_wall_seconds: Optional[float] = None  # every segment of a resumed run; None: a checkpoint too old to say
 
 
 class Progress:
@@ -144,6 +145,8 @@ class Simulation:
         self.peak_kinetic_energy = 0.0
         self.mach_warned = False
         self.last_guarded = 0  # the last step the guard found sound
+        self.wall_before: Optional[float] = 0.0  # s of stepping of the run so far, all segments (kept in checkpoints)
+        self._wall_origin = time.perf_counter()  # perf_counter() at which the run's stepping wall time is 0
 
     # ---- pieces -------------------------------------------------------------------------------
 
@@ -227,8 +230,11 @@ class Simulation:
                          f"spuriously; {advice(self.scene, self.scheme.model, diag['mach'], diag['max_speed'])}\n")
 
     def counters(self) -> dict:
-        return {"t": self.t, "step": self.step_count, "dt": self.dt, "frame": self.frame_index,
-                "peak_kinetic_energy": self.peak_kinetic_energy}
+        counters = {"t": self.t, "step": self.step_count, "dt": self.dt, "frame": self.frame_index,
+                    "peak_kinetic_energy": self.peak_kinetic_energy}
+        if self.wall_before is not None:  # the run's wall time so far, all segments: a resume adds to it
+            counters["wall_seconds"] = time.perf_counter() - self._wall_origin
+        return counters
 
     def resume(self) -> None:
         """Continue from the checkpoint in the output directory: every particle field (the
@@ -249,6 +255,7 @@ class Simulation:
         self.frame_index = int(counters["frame"]) + 1  # the checkpoint was taken at that frame
         self.last_guarded = self.step_count  # checkpoints are written after the guard passed
         self.peak_kinetic_energy = float(counters["peak_kinetic_energy"])
+        self.wall_before = float(counters["wall_seconds"]) if "wall_seconds" in counters else None
         self.output.reopen(self.t)
         self.scheme.place(self.t)  # moving walls of the loaded state
         self.scheme.grid.restore(lists)  # the neighbour list as the uninterrupted run holds it
@@ -304,6 +311,7 @@ class Simulation:
             self.output.write_scene(scene)
         start_steps = self.step_count
         wall_start = time.perf_counter()
+        self._wall_origin = wall_start - (self.wall_before or 0.0)
         if self.step_count == 0:
             self.scheme.prepare()
             self._check("initial rates (step 0)")
@@ -327,6 +335,9 @@ class Simulation:
         wall = time.perf_counter() - wall_start
         steps = self.step_count - start_steps
         n = self.state.n_material
+        if self.wall_before is not None:  # a later run() of this simulation goes on counting
+            self.wall_before += wall
         return RunSummary(steps=steps, time=self.t, wall_seconds=wall, frames=self.frame_index,
                           particle_steps_per_second=n * steps / wall if wall > 0 else 0.0,
-                          out_dir=self.output.dir if self.output else None)
+                          out_dir=self.output.dir if self.output else None,
+                          total_wall_seconds=self.wall_before)

@@ -189,12 +189,16 @@ def test_validation_table_is_gathered_from_the_cases_tables(tmp_path):
     from types import SimpleNamespace
     from taichi_granular.config import load_scene
     from taichi_granular.paths import config_path
-    from taichi_granular.validation.table import record_run, resolution
+    from taichi_granular.validation.table import cost, record_run, resolution
     scene = load_scene(config_path("mu_i/collapse_a0_19.yaml"), ["material.regularisation_time=3.6"])
     record_run(tmp_path, SimpleNamespace(steps=10, wall_seconds=1.0, particle_steps_per_second=1.0), 5,
                ["numerics.particle_spacing=0.0006", "material.regularisation_time=3.6"])
     frames = [{"is_wall": np.zeros(5)}]
     assert resolution(scene, frames, tmp_path) == "dp 1.2 mm, 5 particles, material.regularisation_time=3.6"
+    # a run resumed from a checkpoint older than its wall-time counter: only the last part is timed, and said so
+    record_run(tmp_path, SimpleNamespace(steps=10, wall_seconds=1.0, particle_steps_per_second=1.0,
+                                         total_wall_seconds=None), 5, resumed_at_step=30)
+    assert cost(tmp_path) == "40 steps, 1 s for the last 10 (resumed at step 30)"
     # a later run of the same case and resolution replaces the earlier one in the README, not in summary.md
     write_rows(tmp_path / "s99_rerun" / "drum", [Row("drum: drum_omega1", "mean inclination; flowing depth",
                                                      "27.0 deg; 40 mm", "22.43 deg; 54 mm", "[P]'s table",
@@ -232,10 +236,12 @@ def test_validation_rows_are_archived_so_the_table_outlives_the_run_folders(tmp_
 def test_validate_resume_continues_an_interrupted_case_from_its_checkpoint(tmp_path):
     """A case whose run stopped half-way (a checkpoint, no run.json) continues with `validate
     --resume` and takes the same steps as the uninterrupted run (bit-exact resume); its cost
-    says it was resumed; a finished case is reused, not rerun."""
+    counts the wall time of both segments (the checkpoint carries the first's) and says it was
+    resumed; a finished case is reused, not rerun."""
     import json
 
     from taichi_granular.config import load_scene
+    from taichi_granular.output import read_checkpoint
     from taichi_granular.paths import config_path
     from taichi_granular.simulation import Simulation
 
@@ -246,11 +252,15 @@ def test_validate_resume_continues_an_interrupted_case_from_its_checkpoint(tmp_p
     whole = json.loads((tmp_path / "whole" / "collapse_a0_90" / "run.json").read_text())
 
     scene = load_scene(config_path("mu_i/collapse_a0_90.yaml"), sets)
-    Simulation(scene, out_dir=tmp_path / "cut" / "collapse_a0_90", progress=False).run(end_time=0.05)
+    first = Simulation(scene, out_dir=tmp_path / "cut" / "collapse_a0_90", progress=False).run(end_time=0.05)
+    _, counters = read_checkpoint(tmp_path / "cut" / "collapse_a0_90")
+    assert 0.0 < counters["wall_seconds"] <= first.wall_seconds == first.total_wall_seconds
     main(common + ["--out", str(tmp_path / "cut"), "--resume"])
     cut = json.loads((tmp_path / "cut" / "collapse_a0_90" / "run.json").read_text())
     assert cut["steps"] == whole["steps"] and 0 < cut["resumed_at_step"] < cut["steps"]
-    assert "resumed at step" in (tmp_path / "cut" / "table.csv").read_text()
+    assert cut["wall_complete"] and cut["wall_seconds"] >= round(counters["wall_seconds"], 1)
+    table = (tmp_path / "cut" / "table.csv").read_text()
+    assert f"{cut['steps']} steps, {cut['wall_seconds']:.0f} s (resumed at step {cut['resumed_at_step']})" in table
     fronts = [(tmp_path / d / "collapse_a0_90" / "fronts.csv").read_text() for d in ("whole", "cut")]
     assert fronts[0] == fronts[1]
     stamp = (tmp_path / "cut" / "collapse_a0_90" / "run.json").stat().st_mtime_ns

@@ -37,11 +37,16 @@ class Row:
 def record_run(out: Path, summary, n_material: int, overrides=(), resumed_at_step=None) -> None:
     """Keep the run's cost, and the ``--set`` overrides it ran with, beside its frames (``--reuse``
     reads them back). A run continued from its checkpoint (``resumed_at_step``) counts all its
-    steps but only the continued part's wall time, and says so."""
+    steps and the wall time of all its segments (the checkpoint carries the earlier ones'); a
+    checkpoint too old to carry it leaves only the continued part's wall time, and says so."""
+    total = getattr(summary, "total_wall_seconds", None)
     run = {"steps": summary.steps, "wall_seconds": round(summary.wall_seconds, 1), "particles": n_material,
            "particle_steps_per_second": summary.particle_steps_per_second, "set": list(overrides)}
     if resumed_at_step is not None:
-        run.update(steps=resumed_at_step + summary.steps, resumed_at_step=resumed_at_step)
+        run.update(steps=resumed_at_step + summary.steps, resumed_at_step=resumed_at_step,
+                   wall_complete=total is not None)
+        if total is not None:
+            run.update(wall_seconds=round(total, 1))
     atomic_write_text(Path(out) / RUN_FILE, json.dumps(run) + "\n")
 
 
@@ -69,10 +74,12 @@ def cost(out: Path) -> str:
     if not path.exists():
         return "-"
     run = json.loads(path.read_text())
-    if "resumed_at_step" in run:
-        return (f"{run['steps']} steps, {run['wall_seconds']:.0f} s for the last "
-                f"{run['steps'] - run['resumed_at_step']} (resumed at step {run['resumed_at_step']})")
-    return f"{run['steps']} steps, {run['wall_seconds']:.0f} s"
+    if "resumed_at_step" not in run:
+        return f"{run['steps']} steps, {run['wall_seconds']:.0f} s"
+    if run.get("wall_complete"):
+        return f"{run['steps']} steps, {run['wall_seconds']:.0f} s (resumed at step {run['resumed_at_step']})"
+    return (f"{run['steps']} steps, {run['wall_seconds']:.0f} s for the last "
+            f"{run['steps'] - run['resumed_at_step']} (resumed at step {run['resumed_at_step']})")
 
 
 def write_rows(base: Path, rows: List[Row]) -> None:
