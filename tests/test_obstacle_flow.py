@@ -90,6 +90,19 @@ def test_no_shock_and_open_wake_when_the_flow_ignores_the_obstacle():
     assert not frame.wake_closed
 
 
+def test_shock_and_wake_persist_in_nine_tenths_of_the_steady_frames():
+    """Over the steady frames (the last 30 %: 12 of 40) a shock missing from one frame still
+    persists (11/12 >= 90 %), a wake open in two does not (10/12); the table says the counts."""
+    from types import SimpleNamespace
+
+    frames = [SimpleNamespace(time=0.1 * k, shock=k != 30, wake_closed=k not in (31, 35), depth_jump=2.0,
+                              standoff=0.02) for k in range(40)]
+    result = of.ObstacleFlowResult("cylinder", frames)
+    assert len(result.steady) == 12 and result.count("shock") == 11 and result.count("wake_closed") == 10
+    assert result.shock_persists and not result.wake_persists
+    assert result.shock_text() == "shock in 11/12 frames (jump 2.00, stand-off 20 mm)"
+
+
 def test_oblique_shocks_along_a_wedges_faces_are_measured():
     """A 10 mm layer raised to 30 mm between the faces of a wedge (half-angle 21.8 deg, tip at
     s = 0.4 m, 50 mm long) and lines from its tip at 40 deg to the chute's axis, read on the depth

@@ -23,7 +23,9 @@ with the material particles' height above the bed:
   the chute's axis (above the wedge's half-angle where a shock stands off the face), and the
   raised layer's mean depth over h_0 its depth jump.
 A bow shock "appears" when the depth jump exceeds SHOCK_JUMP; steady state is the last
-``STEADY_FRACTION`` of the frames, over which shock and closed wake must hold in every frame.
+``STEADY_FRACTION`` of the frames, over which shock and closed wake must hold in at least
+``PERSISTENCE`` of the frames (issue 26's 90 %: a stream a few grains deep may open the wake for
+a frame).
 
 Units: m, m^2, s.
 """
@@ -42,6 +44,7 @@ from .obstacles import along_chute, obstacle_of
 
 SHOCK_JUMP = 1.5  # h_1/h_0 above which the frame has a bow shock
 STEADY_FRACTION = 0.3  # the last 30 % of the frames make the steady state
+PERSISTENCE = 0.9  # of the steady frames in which the shock (the closed wake) must stand
 PROTECTED_LENGTH = 0.10  # [m] behind the rear that the wedge protects (our choice)
 CELL_FACTOR = 1.5  # grid cell = 1.5 dp: a lattice of particles leaves no empty cell
 OBLIQUE_THRESHOLD = 0.5 * (1.0 + SHOCK_JUMP)  # of h_0: the raised layer along a wedge's face ends below this
@@ -228,13 +231,22 @@ class ObstacleFlowResult:
         values = np.array([getattr(f, key) for f in self.steady], float)
         return float(np.nanmean(values)) if np.isfinite(values).any() else float("nan")
 
+    def count(self, key: str) -> int:
+        """Steady frames in which the boolean ``key`` (shock, wake_closed) holds."""
+        return sum(bool(getattr(f, key)) for f in self.steady)
+
     @property
     def shock_persists(self) -> bool:
-        return all(f.shock for f in self.steady)
+        return self.count("shock") >= PERSISTENCE * len(self.steady)
 
     @property
     def wake_persists(self) -> bool:
-        return all(f.wake_closed for f in self.steady)
+        return self.count("wake_closed") >= PERSISTENCE * len(self.steady)
+
+    def shock_text(self) -> str:
+        """The bow shock over the steady frames, for the validation table."""
+        return (f"shock in {self.count('shock')}/{len(self.steady)} frames (jump {self.mean('depth_jump'):.2f}, "
+                f"stand-off {1e3 * self.mean('standoff'):.0f} mm)")
 
     @property
     def protected_max(self) -> int:
@@ -293,8 +305,7 @@ def check(case, runs, base, args) -> bool:
         where = (resolution(scene, frames, out), cost(out))
         if "wedge" in scene.name:
             passed = result.shock_persists and result.protected_max == 0
-            measure, ours = "bow shock; protected zone empty", (f"{'yes' if result.shock_persists else 'no'}; "
-                                                              f"{result.protected_max} particles inside")
+            measure, ours = "bow shock; protected zone empty", f"{result.shock_text()}; {result.protected_max} inside"
             reference = "Tai et al. (2001) experiment: shock, empty zone"
             angle, jump = result.oblique()
             reported = [Row(f"{case.name}: {scene.name}", "oblique shocks: angle to the chute's axis (the wedge's "
@@ -303,15 +314,19 @@ def check(case, runs, base, args) -> bool:
         else:
             reported = []
             passed = result.shock_persists and result.wake_persists
-            measure, ours = "bow shock; closed wake", (f"{'yes' if result.shock_persists else 'no'}; "
-                                                       f"{'yes' if result.wake_persists else 'no'}")
+            measure, ours = "bow shock; closed wake", (f"{result.shock_text()}; wake closed in "
+                                                       f"{result.count('wake_closed')}/{len(result.steady)} "
+                                                       f"({1e3 * result.mean('wake_length'):.0f} mm, "
+                                                       f"{1e4 * result.mean('wake_area'):.0f} cm2)")
             reference = "Cui & Gray (2013) experiment: shock, closed wake"
         ok &= passed
         rows += [Row(f"{case.name}: {scene.name}", measure, ours, "-", reference, *where,
                      "PASS" if passed else "FAIL")] + reported
     print(f"steady state: the last {100 * STEADY_FRACTION:.0f} % of the frames; shock: depth jump > "
           f"{SHOCK_JUMP}; wedge: 'inside' counts particles within {PROTECTED_LENGTH} m behind the building")
-    print(f"acceptance (cylinder: shock and closed wake persist; wedge: shock persists, protected zone empty): "
+    share = f">= {100 * PERSISTENCE:.0f} % of the steady frames"
+    print(f"acceptance (cylinder: shock and closed wake in {share}; wedge: shock in {share}, protected zone empty "
+          f"in all): "
           f"{'PASS' if ok else 'FAIL'}; per frame -> {base}/<case>/obstacle_flow.csv")
     write_rows(base, rows)
     return ok
