@@ -208,6 +208,17 @@ def test_validation_table_is_gathered_from_the_cases_tables(tmp_path):
     written = readme.read_text()
     assert "27.0 deg; 40 mm" in written and "30.8 deg; 46 mm" not in written
     assert "27.0 deg; 40 mm" in markdown(tmp_path) and "30.8 deg; 46 mm" in markdown(tmp_path)
+    # ... also one at the same dp that differed by a --set; one at another dp stands beside it
+    write_rows(tmp_path / "s99_set" / "drum", [Row("drum: drum_omega1", "mean inclination; flowing depth",
+                                                   "29.5 deg; 34 mm", "22.43 deg; 54 mm", "[P]'s table",
+                                                   "dp 5 mm, 1212 particles, numerics.smoothing_length_ratio=1.6",
+                                                   "-", "FAIL")])
+    write_rows(tmp_path / "s99_set" / "drum_coarse", [Row("drum: drum_omega1", "mean inclination; flowing depth",
+                                                          "31.2 deg; 48 mm", "22.43 deg; 54 mm", "[P]'s table",
+                                                          "dp 10 mm, 289 particles", "-", "FAIL")])
+    update_readme(readme, tmp_path)
+    written = readme.read_text()
+    assert "29.5 deg; 34 mm" in written and "31.2 deg; 48 mm" in written and "27.0 deg; 40 mm" not in written
     readme.write_text("# no block\n")
     with pytest.raises(ValueError, match="no validation block"):
         update_readme(readme, tmp_path)
