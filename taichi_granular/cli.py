@@ -229,8 +229,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("case", help="the validation case", choices=list(CASES))
     p.add_argument("--resolution", choices=list(RESOLUTIONS), default="coarse",
                    help="column-collapse-3d, stake-rows, obstacle-flow: the coarse CPU scenes (*_coarse.yaml), "
-                        "the paper's dp on a CPU-sized scene where one exists (*_cpu.yaml: stake-rows), or the "
-                        "paper's resolution (GPU)")
+                        "CPU-sized scenes where one exists (*_cpu.yaml: stake rows at the paper's dp, the cylinder at "
+                        "dp 3.5 mm, the wedge with a deeper stream), or the paper's resolution (GPU)")
     p.add_argument("--cases", nargs="+", help="only these (e.g. a0_90 a2_75; case1 case3; omega1)")
     p.add_argument("--config", help="scene file (default: the bundled one)")
     p.add_argument("--out", help="output directory (default: output/validate/<case>)")

@@ -52,8 +52,8 @@ RESOLUTIONS = {"coarse": "_coarse", "cpu": "_cpu", "paper": ""}  # --resolution:
 
 def _case_paths(folder: str, pattern: str, args):
     """The scene files of a validation family: ``pattern`` (or a list of them) names the coarse CPU variants
-    (``*_coarse.yaml``); ``--resolution cpu`` picks the ``*_cpu.yaml`` variants (the paper's dp on a
-    CPU-sized scene) and ``paper`` the paper-resolution files instead; ``--cases`` filters by stem,
+    (``*_coarse.yaml``); ``--resolution cpu`` picks the ``*_cpu.yaml`` variants (CPU-sized scenes
+    finer than the coarse ones, or with a deeper stream) and ``paper`` the paper-resolution files instead; ``--cases`` filters by stem,
     or by its end without the suffix (``a2_75``, ``case1``, ``cylinder``)."""
     patterns = [pattern] if isinstance(pattern, str) else list(pattern)
     suffix = RESOLUTIONS[getattr(args, "resolution", "coarse")]
