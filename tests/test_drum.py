@@ -46,6 +46,23 @@ def test_drum_measures_see_a_bed_that_does_not_turn_rigidly():
     assert drum.evaluate_drum(scene, times, frames).bed_departure > 0.1
 
 
+def test_drum_verdict_names_each_criterion_it_misses():
+    """The table's acceptance cell says which criterion failed and by how much, so a FAIL row
+    explains itself; a synthetic drum at the model's slope with a rigid bed passes."""
+    scene = load_scene(config_path("hypoplastic/drum_omega1.yaml"))
+    times, frames = synthetic_frames(theta_deg=26.5, delta=0.03, surface_speed=0.2)
+    r = drum.evaluate_drum(scene, times, frames)
+    assert r.verdict() == "PASS", r.verdict()
+    r.bed_departure = 0.074
+    assert r.verdict() == "FAIL: bed 7.4 % off rigid rotation (5)"
+    r.inclination_deg = r.predicted_deg + 3.2
+    assert r.verdict() == "FAIL: bed 7.4 % off rigid rotation (5); inclination +3.2 deg off the model (1.5)"
+    r.inclination_spread_deg = 2.5
+    assert r.verdict().startswith("FAIL: inclination sd 2.5 deg (2.0); bed")
+    r.initial_void_ratio = r.critical_void_ratio + 0.2
+    assert r.verdict() == "transient"
+
+
 def test_fill_swelling_is_the_area_under_the_surface_against_the_grains_volume():
     """A half circle lies under a line through the centre; a lattice fill of one dp^2 a grain fills
     the area under its top grains to within a row; the same grains later 10 % denser by their

@@ -129,10 +129,26 @@ class DrumResult:
             return math.nan
         return self.faces.slope_deg(self.predicted_deg, self.flowing_depth, 2.0 * BUDGET_SPAN * self.radius)
 
+    def misses(self) -> List[str]:
+        """The acceptance criteria this drum misses, each with its figure and tolerance (none: it
+        passes): continuous rolling, a rigid bed, the mean inclination at the model's steady
+        prediction."""
+        off = self.inclination_deg - self.predicted_deg
+        return ([f"inclination sd {self.inclination_spread_deg:.1f} deg ({STEADY_SPREAD_DEG})"]
+                * (self.inclination_spread_deg >= STEADY_SPREAD_DEG)
+                + [f"bed {100 * self.bed_departure:.1f} % off rigid rotation ({100 * RIGID_TOLERANCE:.0f})"]
+                * (self.bed_departure >= RIGID_TOLERANCE)
+                + [f"inclination {off:+.1f} deg off the model ({INCLINATION_TOLERANCE_DEG})"]
+                * (abs(off) > INCLINATION_TOLERANCE_DEG))
+
     def passed(self) -> bool:
-        """Continuous rolling, a rigid bed, the mean inclination at the model's steady prediction."""
-        return (self.inclination_spread_deg < STEADY_SPREAD_DEG and self.bed_departure < RIGID_TOLERANCE
-                and abs(self.inclination_deg - self.predicted_deg) <= INCLINATION_TOLERANCE_DEG)
+        return not self.misses()
+
+    def verdict(self) -> str:
+        """The table's acceptance cell: transient (a loose start), PASS, or FAIL with what it misses."""
+        if self.loose_start:
+            return "transient"
+        return "PASS" if self.passed() else "FAIL: " + "; ".join(self.misses())
 
     def row(self) -> str:
         paper = self.paper or (math.nan, math.nan)
@@ -634,6 +650,6 @@ def check(case, runs, base, args) -> bool:
                           "-" if r.paper is None else f"{r.paper[0]} deg; {1e3 * r.paper[1]:.0f} mm (out of reach)",
                           f"model's steady slope {r.predicted_deg:.1f} deg"
                           + ("" if r.faces is None else f"; with the law's faces {r.faces_slope_deg():.1f} deg"),
-                          res, run_cost, "transient" if r.loose_start else ("PASS" if r.passed() else "FAIL"))
+                          res, run_cost, r.verdict())
                       for r, (res, run_cost) in zip(results, where)])
     return ok
