@@ -64,7 +64,9 @@ class Scene:
     numerics: Numerics = scene_key("discretisation")
     run: Run = scene_key("run length and output cadence")
     name: str = scene_key("scene name (default: file name)", "scene")
-    arch: Literal["cpu", "cuda", "vulkan", "metal", "gpu"] = scene_key("Taichi backend", "cpu")
+    arch: Literal["cpu", "cuda", "vulkan", "metal", "gpu"] = scene_key(
+        "Taichi backend; gpu: the first of CUDA, Vulkan (Metal on macOS) found; without a device the run "
+        "goes on the CPU and says so", "cpu")
     precision: Literal["f32", "f64"] = scene_key("floating point precision of all fields", "f64")
     gravity: Gravity = scene_key("gravitational acceleration", Gravity())
     walls: Tuple[Wall, ...] = scene_key("walls as boundary particles", ())

@@ -7,11 +7,17 @@ existing field, so do it before building a simulation).
 from __future__ import annotations
 
 import os
+import sys
 
 import taichi as ti
 
 ARCHES = {"cpu": "cpu", "cuda": "cuda", "vulkan": "vulkan", "metal": "metal", "gpu": "gpu"}
+# What ``arch: gpu`` tries, in order. Not Taichi's own ti.gpu, which also probes OpenGL: on a
+# machine without a GPU or display that probe crashed the process (measured 2026-12-07, Taichi
+# 1.7.4: ti.init(arch=ti.gpu) and ti.opengl segfault; ti.cuda and ti.vulkan fall back to the CPU).
+GPU_ORDER = ("cuda", "vulkan", "metal")
 _current: tuple | None = None
+_on_cpu = True  # whether the runtime runs on the CPU: a GPU arch falls back to it where no device is
 THREADS_ENV = "TAICHI_GRANULAR_CPU_THREADS"  # Taichi's CPU threads, when set (a sweep's runs)
 
 # Every top-level particle loop is written ``ti.loop_config(serialize=runtime.serial_loops)``.
@@ -39,12 +45,20 @@ def init(arch: str = "cpu", precision: str = "f64", force: bool = False) -> None
     key = (arch, precision)
     if _current == key and not force:
         return
+    global _on_cpu
     fp = ti.f64 if precision == "f64" else ti.f32
     # a sweep's worker runs each job with cores // workers threads (sweep/engine.py)
     threads = os.environ.get(THREADS_ENV)
     extra = {"cpu_max_num_threads": int(threads)} if threads else {}
-    ti.init(arch=getattr(ti, ARCHES[arch]), default_fp=fp, default_ip=ti.i32,
-            random_seed=0, log_level=ti.WARN, **extra)
+    tried = [a for a in GPU_ORDER if a != "metal" or sys.platform == "darwin"] if arch == "gpu" else [ARCHES[arch]]
+    for candidate in tried:
+        ti.init(arch=getattr(ti, candidate), default_fp=fp, default_ip=ti.i32,
+                random_seed=0, log_level=ti.WARN, **extra)
+        _on_cpu = ti.lang.impl.current_cfg().arch in (ti.x64, ti.arm64)
+        if not _on_cpu:
+            break
+    if _on_cpu and arch != "cpu":
+        print(f"warning: arch {arch}: no {' or '.join(tried)} device here; running on the CPU", file=sys.stderr)
     _current = key
 
 
@@ -52,7 +66,7 @@ def choose_loops(n_particles: int) -> None:
     """Serial loops for CPU scenes below SERIAL_BELOW particles, parallel otherwise (measured
     crossover, ``taichi-granular bench throughput``); GPU loops are always parallel."""
     global serial_loops
-    serial_loops = _current is not None and _current[0] == "cpu" and n_particles < SERIAL_BELOW
+    serial_loops = _current is not None and _on_cpu and n_particles < SERIAL_BELOW
 
 
 def current() -> tuple | None:
