@@ -11,7 +11,6 @@ import sys
 
 import taichi as ti
 
-ARCHES = {"cpu": "cpu", "cuda": "cuda", "vulkan": "vulkan", "metal": "metal", "gpu": "gpu"}
 # What ``arch: gpu`` tries, in order. Not Taichi's own ti.gpu, which also probes OpenGL: on a
 # machine without a GPU or display that probe crashed the process (measured 2026-12-07, Taichi
 # 1.7.4: ti.init(arch=ti.gpu) and ti.opengl segfault; ti.cuda and ti.vulkan fall back to the CPU).
@@ -41,16 +40,15 @@ SERIAL_BELOW = 1_500
 
 def init(arch: str = "cpu", precision: str = "f64", force: bool = False) -> None:
     """Initialise Taichi for ``arch`` with ``precision`` ('f32' or 'f64') if not already so."""
-    global _current
+    global _current, _on_cpu
     key = (arch, precision)
     if _current == key and not force:
         return
-    global _on_cpu
     fp = ti.f64 if precision == "f64" else ti.f32
     # a sweep's worker runs each job with cores // workers threads (sweep/engine.py)
     threads = os.environ.get(THREADS_ENV)
     extra = {"cpu_max_num_threads": int(threads)} if threads else {}
-    tried = [a for a in GPU_ORDER if a != "metal" or sys.platform == "darwin"] if arch == "gpu" else [ARCHES[arch]]
+    tried = [a for a in GPU_ORDER if a != "metal" or sys.platform == "darwin"] if arch == "gpu" else [arch]
     for candidate in tried:
         ti.init(arch=getattr(ti, candidate), default_fp=fp, default_ip=ti.i32,
                 random_seed=0, log_level=ti.WARN, **extra)

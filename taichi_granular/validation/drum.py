@@ -133,13 +133,15 @@ class DrumResult:
         """The acceptance criteria this drum misses, each with its figure and tolerance (none: it
         passes): continuous rolling, a rigid bed, the mean inclination at the model's steady
         prediction."""
+        misses = []
+        if self.inclination_spread_deg >= STEADY_SPREAD_DEG:
+            misses.append(f"inclination sd {self.inclination_spread_deg:.1f} deg ({STEADY_SPREAD_DEG})")
+        if self.bed_departure >= RIGID_TOLERANCE:
+            misses.append(f"bed {100 * self.bed_departure:.1f} % off rigid rotation ({100 * RIGID_TOLERANCE:.0f})")
         off = self.inclination_deg - self.predicted_deg
-        return ([f"inclination sd {self.inclination_spread_deg:.1f} deg ({STEADY_SPREAD_DEG})"]
-                * (self.inclination_spread_deg >= STEADY_SPREAD_DEG)
-                + [f"bed {100 * self.bed_departure:.1f} % off rigid rotation ({100 * RIGID_TOLERANCE:.0f})"]
-                * (self.bed_departure >= RIGID_TOLERANCE)
-                + [f"inclination {off:+.1f} deg off the model ({INCLINATION_TOLERANCE_DEG})"]
-                * (abs(off) > INCLINATION_TOLERANCE_DEG))
+        if abs(off) > INCLINATION_TOLERANCE_DEG:
+            misses.append(f"inclination {off:+.1f} deg off the model ({INCLINATION_TOLERANCE_DEG})")
+        return misses
 
     def passed(self) -> bool:
         return not self.misses()
