@@ -17,10 +17,12 @@ from .sections import Domain
 class _Friction:
     """How a dynamic boundary resists the material sliding along it (physics/walls/dynamic.py)."""
 
-    friction: Optional[Literal["coulomb", "rough"]] = scene_key(
+    friction: Optional[Literal["coulomb", "rough", "pressure_only"]] = scene_key(
         "dynamic boundaries: coulomb (the default: the wall's shear force is at most tan(delta) times its normal "
-        "force, delta = friction_angle_deg) or rough (the wall carries the facing grain's deviatoric stress, so its "
-        "friction is the material's own strength: none for grains at zero pressure, which then slide freely)", None)
+        "force, delta = friction_angle_deg), rough (the wall carries the facing grain's deviatoric stress, so its "
+        "friction is the material's own strength: none for grains at zero pressure, which then slide freely) or "
+        "pressure_only ([A] section 4.3: the boundary particles carry only their equation-of-state pressure and no rule of "
+        "their own; what shear the wall passes comes from the grain's own stress and the artificial viscosity)", None)
     friction_angle_deg: Optional[float] = scene_key(
         "dynamic boundaries, coulomb: the friction angle delta between the material and this boundary; default the "
         "material's friction angle (elastoplastic phi, mu(I) arctan(mu_s))", None, "deg", bounds="[0, 90)",
@@ -31,8 +33,9 @@ class _Friction:
             if getattr(self, key) is not None and not dynamic:
                 raise ConfigError(f"{path}.{key}", "only dynamic boundary particles take a friction rule (ghost and "
                                                    "extrapolated walls are no-slip)")
-        if self.friction == "rough" and self.friction_angle_deg is not None:
-            raise ConfigError(f"{path}.friction_angle_deg", "a rough wall takes no Coulomb friction angle")
+        if self.friction in ("rough", "pressure_only") and self.friction_angle_deg is not None:
+            raise ConfigError(f"{path}.friction_angle_deg", f"a wall with friction: {self.friction} takes no Coulomb "
+                                                            "friction angle")
 
 
 @dataclass(frozen=True, kw_only=True)

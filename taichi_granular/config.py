@@ -104,7 +104,8 @@ class Scene:
         sources = [(f"walls[{k}]", w) for k, w in enumerate(self.walls)] + \
             [(f"obstacles[{k}]", o) for k, o in enumerate(self.obstacles)]
         for path, source in sources:
-            if self.is_dynamic(source) and source.friction != "rough" and self.boundary_friction_deg(source) is None:
+            if self.is_dynamic(source) and source.friction in (None, "coulomb") and \
+                    self.boundary_friction_deg(source) is None:
                 raise ConfigError(f"{path}.friction_angle_deg", f"material.model: {self.material.model} has no "
                                                                 "friction angle to default to: give one, or friction: rough")
         if self.wall_types and self.wall_types not in WALL_COMBINATIONS:
@@ -153,8 +154,8 @@ class Scene:
     def boundary_friction_deg(self, source) -> Optional[float]:
         """delta of a wall's or obstacle's Coulomb friction with the material [deg]: its own
         friction_angle_deg, else the material's friction angle; None where it has no Coulomb
-        friction (rough, or not dynamic boundary particles)."""
-        if not self.is_dynamic(source) or source.friction == "rough":
+        friction (rough, pressure_only, or not dynamic boundary particles)."""
+        if not self.is_dynamic(source) or source.friction in ("rough", "pressure_only"):
             return None
         return source.friction_angle_deg if source.friction_angle_deg is not None else self.material.wall_friction_deg
 

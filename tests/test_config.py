@@ -154,5 +154,10 @@ def test_dynamic_boundaries_default_to_coulomb_friction_at_the_material_angle():
     assert "wall_friction" not in [s.name for s in rough.rate_stages]
     with pytest.raises(ConfigError, match="walls\\[0\\].friction: only dynamic"):
         load_scene(config_path("mu_i/inclined_plane.yaml"), ["walls.0.friction=coulomb"])
-    with pytest.raises(ConfigError, match="a rough wall takes no Coulomb friction angle"):
+    with pytest.raises(ConfigError, match="friction: rough takes no Coulomb friction angle"):
         load_scene(config_path(base), ["walls.0.friction=rough"])
+    with pytest.raises(ConfigError, match="friction: pressure_only takes no Coulomb friction angle"):
+        load_scene(config_path(base), ["walls.0.friction=pressure_only"])
+    plain = Scheme(load_scene(config_path(base), ["walls.0.friction_angle_deg=null", "walls.0.friction=pressure_only"]))
+    assert "wall_friction" not in [s.name for s in plain.rate_stages]
+    assert set(plain.state.wall_friction.to_numpy()) == {-2.0}  # dynamic.NO_RULE: [A]'s wall

@@ -215,6 +215,45 @@ def test_efficiency_factor_counts_the_areas():
     assert ob.evaluate_stake_rows(scene, [0.0], [off]).fell_off == n
 
 
+def test_grains_off_the_chute_are_not_retained():
+    """Four grains in area 1 and the same four 0.4 m off the centre line and 0.3 m below the bed
+    (fallen over the side of the 0.4 m chute): half the sand is retained, not all of it, although
+    the fallen grains' distance along the chute lies in area 1; a grain taken out at an open face
+    is not retained either."""
+    from taichi_granular.scene.geometry import chute_surface
+    from taichi_granular.validation import obstacles as ob
+
+    scene = stake_scene(2)
+    chute = ob.obstacle_of(scene, ob.ChuteObstacle)
+    s = np.array([1.60, 1.65, 1.70, 1.75])  # area 1: the slope break at 1.55 m, the first row at 1.85 m
+    on = chute_surface(chute, 3, s) + np.array([0.0, 0.0, 0.004])
+    fallen = on + np.array([0.0, 0.4, -0.3])
+    pos = np.vstack([on, fallen])
+    frame = {"position": pos, "mass": np.ones(8), "is_wall": np.zeros(8, int)}
+    result = ob.evaluate_stake_rows(scene, [0.0], [frame])
+    assert result.area1 == pytest.approx(0.5) and result.efficiency == pytest.approx(0.5)
+    assert result.lost == pytest.approx(0.5) and result.not_retained == pytest.approx(0.5)
+    assert result.fell_off == 4 and result.crossed == 0
+    departed = dict(frame, position=np.vstack([on, on]), outflow=np.array([0.0] * 4 + [1.0] * 4))
+    result = ob.evaluate_stake_rows(scene, [0.0], [departed])
+    assert result.efficiency == pytest.approx(0.5) and result.departed == 4 and result.fell_off == 0
+
+
+def test_stake_rows_are_judged_against_the_papers_sph():
+    """The efficiency and area 1 are judged against [A]'s SPH at dp 5 mm: within 10 points of
+    both passes, 11 points off either fails."""
+    from taichi_granular.validation import obstacles as ob
+
+    def result(efficiency, area1):
+        return ob.StakeRowResult(name="stake_rows_case2_cpu", case="case2", efficiency=efficiency, area1=area1,
+                                 area2=efficiency - area1, passed=1 - efficiency, upper_panel=0.0, lost=0.0,
+                                 crossed=0, fell_off=0, departed=0, front_stop_time=1.0)
+
+    assert result(0.43, 0.0).within and result(0.52, 0.09).within
+    assert not result(0.48 + 0.06, 0.0).within  # 11 points above [A]'s 43 %
+    assert not result(0.43, 0.11).within  # area 1 11 points above [A]'s 0 %
+
+
 def test_material_inside_an_obstacle_is_refused():
     from taichi_granular.config import ConfigError
     from taichi_granular.physics.rheology import model_class

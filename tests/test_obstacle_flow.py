@@ -10,11 +10,12 @@ from taichi_granular.local_frame import to_global
 from taichi_granular.validation import obstacle_flow as of
 
 DP = 0.005
+ORIGIN = to_global(np.array([[0.4, 0.0, 0.0]]), None, 36.0)[0].tolist()  # s = 0.4 m on the centre line
 
 
-def chute_scene(name, solid):
-    """A 36 deg chute 0.3 m wide with ``solid`` (an obstacle's keys, placed in the chute's frame at
-    s = 0.4 m on its centre line)."""
+def chute_scene(name, *solids):
+    """A 36 deg chute 0.3 m wide with ``solids`` (obstacles' keys, each placed in the chute's frame
+    at s = 0.4 m on its centre line)."""
     return scene_from_dict({
         "name": name, "dimension": 3,
         "domain": {"lower": [-0.1, -0.2, -0.5], "upper": [0.7, 0.2, 0.1]},
@@ -23,9 +24,8 @@ def chute_scene(name, solid):
         "particles": [{"lower": [0.02, -0.1, 0.0], "upper": [0.08, 0.1, 0.03], "origin": [0.0, 0.0, 0.0],
                        "tilt_deg": 36.0}],
         "obstacles": [{"name": "chute", "shape": "chute", "tilt_deg": 36.0, "width": 0.3,
-                       "segments": [{"length": 0.7, "slope_deg": 36.0}]},
-                      dict(solid, tilt_deg=36.0,
-                           origin=to_global(np.array([[0.4, 0.0, 0.0]]), None, 36.0)[0].tolist())],
+                       "segments": [{"length": 0.7, "slope_deg": 36.0}]}]
+                     + [dict(solid, tilt_deg=36.0, origin=ORIGIN) for solid in solids],
         "numerics": {"particle_spacing": DP},
         "run": {"end_time": 1.0, "output_interval": 0.1},
     })
@@ -36,13 +36,16 @@ def cylinder_scene():
 
 
 def wedge_scene():
+    """A wedge 50 mm long and 40 mm wide (tip at s = 0.4 m) and, right behind it in its frame, a
+    building 50 mm long, as wide and as high: the protected zone is s 0.45-0.55 m, |y| < 20 mm."""
     return chute_scene("wedge_case", {"name": "wedge", "shape": "wedge", "length": 0.05, "width": 0.04,
-                                      "height": 0.05})
+                                      "height": 0.05},
+                       {"name": "building", "shape": "box", "lower": [0.05, -0.02, 0.0], "upper": [0.10, 0.02, 0.05]})
 
 
-def layer_frame(depth_of, empty_of):
+def layer_frame(depth_of, empty_of, speed=0.0):
     """Material on a DP lattice over the chute (local frame), as deep as depth_of(s, y), with
-    none where empty_of(s, y)."""
+    none where empty_of(s, y), all moving down the slope at ``speed`` [m/s]."""
     s, y = np.meshgrid(np.arange(0.5 * DP, 0.7, DP), np.arange(-0.15 + 0.5 * DP, 0.15, DP), indexing="ij")
     s, y = s.ravel(), y.ravel()
     keep = ~empty_of(s, y)
@@ -50,9 +53,15 @@ def layer_frame(depth_of, empty_of):
     for si, yi in zip(s[keep], y[keep]):
         for z in np.arange(0.5 * DP, depth_of(si, yi), DP):
             points.append((si, yi, z))
+    return particles_frame(points, speed)
+
+
+def particles_frame(points, speed=0.0):
+    """A frame of material particles at local-frame ``points`` moving down the slope at ``speed``."""
     x = to_global(np.array(points), None, 36.0)
     n = len(x)
-    return {"position": x, "is_wall": np.zeros(n, int), "mass": np.ones(n)}
+    return {"position": x, "is_wall": np.zeros(n, int), "mass": np.ones(n),
+            "velocity": np.tile(to_global(np.array([[speed, 0.0, 0.0]]), None, 36.0), (n, 1))}
 
 
 def test_bow_shock_standoff_depth_jump_and_closed_wake_are_measured():
@@ -104,11 +113,14 @@ def test_shock_and_wake_persist_in_nine_tenths_of_the_steady_frames():
 
 
 def test_oblique_shocks_along_a_wedges_faces_are_measured():
-    """A 10 mm layer raised to 30 mm between the faces of a wedge (half-angle 21.8 deg, tip at
-    s = 0.4 m, 50 mm long) and lines from its tip at 40 deg to the chute's axis, read on the depth
-    averaged over the steady frames: the shock's angle within 4 deg (cells of 7.5 mm over a 50 mm
-    wedge) and the jump of 3, also for a sparse sheet whose frames each hold a quarter of its
-    columns; a layer that ignores the wedge has no raised layer (NaN)."""
+    """A 10 mm layer moving at 1.5 m/s, raised to 30 mm between the faces of a wedge (half-angle
+    21.8 deg, tip at s = 0.4 m, 50 mm long) and lines from its tip at 40 deg to the chute's axis,
+    read on the depth averaged over the steady frames: the shock's angle within 4 deg (cells of
+    7.5 mm over a 50 mm wedge), the depth ratio of the raised layer over the depth beside it (10
+    mm) within 10 % of the built 3, the speed there, and the jump condition (Gray & Cui 2007) at
+    the built Froude number F = u / sqrt(g cos(36 deg) h_0) and the measured angle; the ratio also
+    for a sparse sheet whose frames each hold a quarter of its columns; a layer that ignores the
+    wedge has no raised layer (NaN)."""
     scene = wedge_scene()
     assert math.degrees(of.obstacle_geometry(scene).half_angle) == pytest.approx(21.8, abs=0.05)
     inside = lambda s, y: (s >= 0.4) & (s <= 0.45) & (np.abs(y) < (s - 0.4) * 0.4)  # noqa: E731 (tan 21.8 deg)
@@ -116,17 +128,50 @@ def test_oblique_shocks_along_a_wedges_faces_are_measured():
     def depth(s, y):
         return 0.030 if 0.4 <= s <= 0.45 and abs(y) < (s - 0.4) * math.tan(math.radians(40.0)) else 0.010
 
-    frame = layer_frame(depth, inside)
+    frame = layer_frame(depth, inside, speed=1.5)
     result = of.evaluate_obstacle_flow(scene, [0.9, 1.0], [frame, frame])
     assert result.mean("upstream_depth") == pytest.approx(0.010, abs=DP)
-    angle, jump = result.oblique()
-    assert angle == pytest.approx(40.0, abs=4.0)
-    assert jump == pytest.approx(3.0, rel=0.2)
+    shock = result.oblique()
+    assert shock.angle == pytest.approx(40.0, abs=4.0)
+    assert shock.ratio == pytest.approx(3.0, rel=0.1)
+    assert shock.upstream_depth == pytest.approx(0.010, rel=1e-9) and shock.upstream_speed == pytest.approx(1.5)
+    froude = 1.5 / math.sqrt(9.81 * math.cos(math.radians(36.0)) * 0.010)
+    assert shock.froude == pytest.approx(froude)
+    normal = froude * math.sin(math.radians(shock.angle))
+    assert shock.predicted_ratio == pytest.approx((math.sqrt(1.0 + 8.0 * normal**2) - 1.0) / 2.0)
     # a sparse sheet: each frame keeps every fourth lattice column, in turn (cells of 1.5 DP hold none
     # or one), so no frame has the layers whole; the steady window (the last 4 of 12) has them all
-    sparse = [layer_frame(depth, lambda s, y, k=k: inside(s, y) | ((np.round(s / DP) + 2 * np.round(y / DP)) % 4 != k))
-              for k in range(4)] * 3
-    angle, jump = of.evaluate_obstacle_flow(scene, np.arange(12) * 0.1, sparse).oblique()
-    assert angle == pytest.approx(40.0, abs=4.0) and jump == pytest.approx(3.0, rel=0.2)
+    sparse = [layer_frame(depth, lambda s, y, k=k: inside(s, y) | ((np.round(s / DP) + 2 * np.round(y / DP)) % 4 != k),
+                          speed=1.5) for k in range(4)] * 3
+    shock = of.evaluate_obstacle_flow(scene, np.arange(12) * 0.1, sparse).oblique()
+    assert shock.angle == pytest.approx(40.0, abs=4.0) and shock.ratio == pytest.approx(3.0, rel=0.2)
+    assert shock.upstream_speed == pytest.approx(1.5)
     flat = layer_frame(lambda s, y: 0.010, inside)
-    assert all(math.isnan(v) for v in of.evaluate_obstacle_flow(scene, [0.9, 1.0], [flat, flat]).oblique())
+    shock = of.evaluate_obstacle_flow(scene, [0.9, 1.0], [flat, flat]).oblique()
+    assert math.isnan(shock.angle) and math.isnan(shock.ratio) and not shock.within
+
+
+def test_protected_zone_is_the_buildings_footprint_and_one_length_behind_it():
+    """The zone is s 0.45-0.55 m, |y| < 20 mm: a grain on the bed at s = 0.54 m and one over the
+    building (80 mm up, s = 0.47 m) count; one just past the zone (s = 0.56 m) and one beside it
+    (y = 30 mm) do not."""
+    scene = wedge_scene()
+    assert of.obstacle_geometry(scene).protected_zone == pytest.approx((0.45, 0.55, 0.02))
+    count = lambda points: of.measure_flow_frame(scene, particles_frame(points), 1.0).protected_particles  # noqa: E731
+    assert count([(0.54, 0.0, 0.0025), (0.47, 0.01, 0.08)]) == 2
+    assert count([(0.56, 0.0, 0.0025), (0.50, 0.03, 0.0025)]) == 0
+
+
+def test_wedge_acceptance_needs_the_oblique_ratio_within_thirty_percent_of_three():
+    """With the bow shock in every steady frame and the protected zone empty, an oblique depth
+    ratio of 1.7 fails ([A] Fig. 17: about 3, within 30 %) and one of 2.8 passes; a grain in the
+    protected zone fails it too."""
+    from types import SimpleNamespace
+
+    frames = [SimpleNamespace(time=0.1 * k, shock=True, protected_particles=0) for k in range(10)]
+    result = of.ObstacleFlowResult("wedge", frames)
+    shock = lambda ratio: of.ObliqueShock(40.0, ratio * 0.01, 0.01, 1.5, 9.81)  # noqa: E731
+    assert not result.wedge_accepted(shock(1.7))
+    assert result.wedge_accepted(shock(2.8))
+    frames[-1].protected_particles = 1
+    assert not result.wedge_accepted(shock(2.8))

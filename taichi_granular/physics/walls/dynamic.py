@@ -14,6 +14,12 @@ wall never pulls). Its deviatoric stress is that of the material particle it fac
 strength. Without it the stress form [A12] delivers only about half the wall traction, and the
 first row reaches yield and slides.
 
+``friction: pressure_only`` is [A]'s own wall ([A] section 4.3: boundary particles obey continuity and the
+equation of state; "the frictional boundary condition is not implemented"): the boundary
+particle carries its pressure and no deviatoric stress (``stress_index(i, j) = j``), and no
+friction rule acts; what shear reaches the grain comes from its own stress in the pair sum and
+from the artificial viscosity.
+
 Coulomb wall friction (the default, per wall or obstacle: ``friction_angle_deg`` = delta, else the
 material's friction angle; ``friction: rough`` for the rule above alone), not in [A]: a sheet at
 the tension cut-off (p_i = 0) has no strength of its own, so the rough rule gives it no friction
@@ -35,6 +41,10 @@ from ..stage import PairStage, Stage
 from .ghost import NoWalls, boundary_sources
 
 
+ROUGH = -1.0  # wall_friction of a boundary particle that carries the facing grain's s
+NO_RULE = -2.0  # of one that carries only its pressure ([A]'s wall, friction: pressure_only)
+
+
 @ti.data_oriented
 class DynamicWalls(NoWalls):
     name = "dynamic"
@@ -42,6 +52,8 @@ class DynamicWalls(NoWalls):
     fields = (
         FieldSpec("density_rate", "scalar", "d rho/dt from the last rate evaluation [A11]", "kg/m^3/s", "all"),
         FieldSpec("density_start", "scalar", "density at the start of the step", "kg/m^3", "all"),
+        FieldSpec("wall_friction", "scalar", "tan(delta), Coulomb friction coefficient with the material "
+                  f"({ROUGH:g}: a rough wall; {NO_RULE:g}: pressure only, [A]'s wall)", "-", "wall"),
     )
 
     @classmethod
@@ -50,30 +62,37 @@ class DynamicWalls(NoWalls):
 
     def __init__(self, state, gravity=None):
         super().__init__(state, gravity)
-        self.coulomb = state.has("wall_friction")
+        rules = state.wall_friction.to_numpy() if state.n_wall else np.zeros(0)
+        # which boundary particles carry the facing grain's s, chosen at compile time where the
+        # scene's walls all agree (the per-particle test is compiled only for a mix)
+        rough = rules == ROUGH
+        self.all_rough, self.none_rough = bool(rough.all()), bool(not rough.any())
 
     @classmethod
     def initial_fields(cls, scene, initial) -> dict:
-        """tan(delta) of each boundary particle's source, -1 where it has no Coulomb friction (a
-        rough wall; a ghost beside dynamic particles)."""
+        """tan(delta) of each boundary particle's source; ROUGH where it carries the facing grain's
+        s (a rough wall; a ghost beside dynamic particles), NO_RULE for [A]'s wall."""
         fields = super().initial_fields(scene, initial)
-        angles = [scene.boundary_friction_deg(source) for source in boundary_sources(scene)]
-        coefficient = np.array([-1.0 if a is None else math.tan(math.radians(a)) for a in angles], float)
+        sources = boundary_sources(scene)
+        coefficient = np.array([NO_RULE if scene.is_dynamic(source) and source.friction == "pressure_only" else
+                                ROUGH if a is None else math.tan(math.radians(a))
+                                for source, a in zip(sources, map(scene.boundary_friction_deg, sources))], float)
         fields["wall_friction"] = coefficient[initial.wall_of]
         return fields
 
     @ti.func
     def stress_index(self, i, j):
         """i (rough: the wall carries the facing particle's s) unless j's wall has a Coulomb
-        friction angle: then the wall carries no deviatoric stress and WallFriction supplies
-        the shear, which would otherwise count twice."""
+        friction angle (WallFriction supplies the shear, which would otherwise count twice) or
+        pressure_only ([A]'s wall): then the wall carries no deviatoric stress."""
         k = j
         n = self.state.n_material
         if j >= n:
-            k = i
-            if ti.static(self.coulomb):
-                if self.state.wall_friction[j - n] >= 0.0:
-                    k = j
+            if ti.static(self.all_rough):
+                k = i
+            elif ti.static(not self.none_rough):
+                if self.state.wall_friction[j - n] == ROUGH:
+                    k = i
         return k
 
     @classmethod
@@ -125,9 +144,6 @@ class WallFriction(PairStage):
     reads = ("gradient_correction", "velocity_gradient", "strain_rate")  # the momentum pair's
     writes = ("acceleration",)
     equation = "Coulomb |f_t| <= tan(delta) |f_n|"
-    fields = (FieldSpec("wall_friction", "scalar", "tan(delta), Coulomb friction coefficient with the material "
-                        "(-1: none, a rough wall)", "-", "wall"),)
-
     def __init__(self, ctx):
         super().__init__(ctx)
         from ..artificial_viscosity import ArtificialViscosity
@@ -158,7 +174,7 @@ class WallFriction(PairStage):
             grad_w = self.gradient.pairwise(i, j, x_ij, r)
             push = -s.mass[j] * (s.pressure[i] / s.density[i] ** 2 + s.pressure[j] / s.density[j] ** 2) * grad_w
             mu = s.wall_friction[j - n]
-            if mu >= 0.0:  # walls without a friction angle (-1) keep their own shear
+            if mu >= 0.0:  # walls without a friction angle (ROUGH, NO_RULE) keep their own shear
                 acc[0, :] += push
                 acc[1, :] += mu * push
                 total = ti.Vector.zero(float, self.dim)

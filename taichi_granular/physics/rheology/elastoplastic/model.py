@@ -72,6 +72,9 @@ class ElastoplasticMohrCoulomb(Model):
         self.min_density = max(self.rho_0 * (1.0 + self.min_pressure / self.K), 0.0)
         # longitudinal wave speed at rho_0: both the pressure and the shear stiffness load a wave
         self.wave_speed = math.sqrt((self.K + 4.0 * self.G / 3.0) / self.rho_0)
+        # the artificial viscosity's c [A16-19] (material.sound_speed)
+        self.viscosity_sound_speed = self.wave_speed if material.sound_speed == "longitudinal" else \
+            math.sqrt(self.K / self.rho_0)
 
     @classmethod
     def from_scene(cls, scene):
@@ -137,11 +140,12 @@ class ElastoplasticMohrCoulomb(Model):
 
     @ti.func
     def sound_speed(self, k):
-        """sqrt((K + 4G/3)/rho_0), the longitudinal elastic wave speed: the c of the artificial
-        viscosity [A16-19]  [m/s]. Since alpha c then grows as sqrt(E), E steers a flow through
-        the viscosity, not through the elastic strains: a scene that lowers E raises alpha by
-        sqrt(E_paper/E) (docs, lowering E; the sound speed of K alone was measured worse)."""
-        return self.wave_speed
+        """The c of the artificial viscosity [A16-19], by ``material.sound_speed``: the longitudinal
+        elastic wave speed sqrt((K + 4G/3)/rho_0), with which alpha c grows as sqrt(E) (a scene
+        that lowers E then raises alpha by sqrt(E_paper/E)), or the sound speed of the equation
+        of state sqrt(K/rho_0) [A5], with which E reaches the flow only through the elastic
+        strains (docs/models/elastoplastic.md, the artificial viscosity's c)  [m/s]."""
+        return self.viscosity_sound_speed
 
     @ti.func
     def stable_time_step(self, i):

@@ -33,6 +33,12 @@ class ElastoplasticMaterial(MaterialParameters):
     bulk_modulus: Optional[float] = scene_key(
         "K of p = K (rho/rho_0 - 1) [A5]; default 50 rho_0 g H_max, H_max the tallest block", None, "Pa", bounds="(0, 1e12]")
 
+    sound_speed: Literal["longitudinal", "eos"] = scene_key(
+        "c of Monaghan's artificial viscosity [A16-19], which [A] calls the speed of sound: longitudinal, the "
+        "elastic wave speed sqrt((K + 4G/3)/rho_0) (alpha c then grows as sqrt(E)), or eos, the sound speed "
+        "sqrt(K/rho_0) of the soft equation of state [A5] (independent of E). The time step respects the "
+        "longitudinal speed either way", "longitudinal")
+
     def check(self, path: str) -> None:
         """Each key's range is checked by :func:`check_numbers`; no relations between keys."""
 
