@@ -207,6 +207,7 @@ def test_efficiency_factor_counts_the_areas():
     assert result.area1 == pytest.approx(2 / 8) and result.area2 == pytest.approx(1 / 8)
     assert result.efficiency == pytest.approx(3 / 8)
     assert result.passed == pytest.approx(3 / 8) and result.upper_panel == pytest.approx(2 / 8)
+    assert result.efficiency_bracket == pytest.approx((3 / 8, 4 / 8))  # the grain 0.01 m past area 2 within 0.2 m
     assert result.crossed == 0
     below = dict(frame, position=pos - np.array([0.0, 0.0, 0.01]))
     assert ob.evaluate_stake_rows(scene, [0.0], [below]).crossed > 0

@@ -29,6 +29,7 @@ from ..local_frame import local_axes, to_local
 from ..output import left_domain
 
 LEE = 0.10  # [m] past the last row that still counts as retained (area 2; our choice)
+LEE_BRACKET = (0.05, 0.20)  # [m] area 2's lee also read at these ([A] Fig. 7 is the only source of its extent)
 EXPERIMENT = {"case1": 0.76, "case2": 0.48, "case3": 0.80}  # Yellin et al. (2013), via [A]
 SPH_IN_PAPER = {"case1": 0.72, "case2": 0.43, "case3": 0.76}  # [A]'s own SPH at dp 5 mm (section 6.1.2)
 # area 1's share: experiment ([A] Table 1: 0.45 / 0.06 / 0.38 kg of 2.04) and [A]'s SPH
@@ -87,6 +88,7 @@ class StakeRowResult:
     departed: int  # material particles taken out at an open face of the domain (off the chute's end
     # or over a side, outside the domain)
     front_stop_time: float  # [s] after which the leading edge moves slower than 0.1 m/s (nan: still moving)
+    efficiency_bracket: tuple = (float("nan"), float("nan"))  # the efficiency with area 2 to LEE_BRACKET's lees
     times: List[float] = field(default_factory=list)
     leading_edge: List[float] = field(default_factory=list)  # [m] along the chute
 
@@ -124,12 +126,14 @@ class StakeRowResult:
                 f"{pct(AREA1_EXPERIMENT):5.1f}  {100 * self.area2:5.1f} {100 * self.not_retained:5.1f} "
                 f"{100 * self.passed:5.1f} {100 * self.upper_panel:5.1f} {100 * self.lost:5.1f}  "
                 f"{self.leading_edge[-1]:6.3f} {self.front_stop_time:6.2f} {self.times[-1]:6.2f} {self.crossed:4d} "
-                f"{self.fell_off:4d} {self.departed:4d}")
+                f"{self.fell_off:4d} {self.departed:4d}  {100 * self.efficiency_bracket[0]:5.1f} "
+                f"{100 * self.efficiency_bracket[1]:5.1f}")
 
 
 HEADER = (f"{'case':28s} {'eff%':>6s} {'[A]%':>6s} {'exp%':>6s} {'err pt':>7s}  {'a1%':>5s} {'[A]':>5s} "
           f"{'exp':>5s}  {'a2%':>5s} {'not%':>5s} {'pass%':>5s} {'45deg':>5s} {'lost':>5s}  {'edge m':>6s} "
-          f"{'stop s':>6s} {'end s':>6s} {'xed':>4s} {'off':>4s} {'out':>4s}")
+          f"{'stop s':>6s} {'end s':>6s} {'xed':>4s} {'off':>4s} {'out':>4s}  "
+          f"{f'lee{100 * LEE_BRACKET[0]:.0f}':>5s} {f'lee{100 * LEE_BRACKET[1]:.0f}':>5s}")
 
 
 def case_of(name: str) -> str:
@@ -168,6 +172,7 @@ def evaluate_stake_rows(scene: Scene, times: Sequence[float], frames: Sequence[D
 
     area1 = share((s >= break_s) & (s < first_row))
     area2 = share((s >= first_row) & (s < last_row + LEE))
+    bracket = tuple(area1 + share((s >= first_row) & (s < last_row + lee)) for lee in LEE_BRACKET)
     passed = share(s >= last_row + LEE)
     upper = share(s < break_s)
     stop = float("nan")
@@ -179,7 +184,8 @@ def evaluate_stake_rows(scene: Scene, times: Sequence[float], frames: Sequence[D
     return StakeRowResult(name=scene.name, case=case_of(scene.name), efficiency=area1 + area2, area1=area1,
                           area2=area2, passed=passed, upper_panel=upper, lost=mass[~on_chute].sum() / total,
                           crossed=int(np.sum(crossed)), fell_off=int(np.sum(beside)), departed=int(np.sum(departed)),
-                          front_stop_time=stop, times=list(map(float, times)), leading_edge=edges)
+                          front_stop_time=stop, times=list(map(float, times)), leading_edge=edges,
+                          efficiency_bracket=bracket)
 
 
 # ---- the validate command's case (validation/__init__.py CASES) -------------------------------
@@ -204,7 +210,8 @@ def check(case, runs, base, args) -> bool:
     print(f"areas ([A] Table 1): 1 = lower panel above the first row, 2 = first row to {LEE} m past the last; "
           "efficiency = (1 + 2)/every grain; not retained = passed + upper (45 deg) panel + lost (over the sides, "
           "through the bed, out of the domain); judged against [A] = Abdelrazek et al.'s SPH at dp 5 mm, "
-          "exp = Yellin et al. (2013)")
+          f"exp = Yellin et al. (2013); lee5 / lee20: the efficiency with area 2 reaching {LEE_BRACKET[0]} / "
+          f"{LEE_BRACKET[1]} m past the last row")
     close = all(r.within for r in results)
     by_case = {r.case: r.efficiency for r in results}
     lowest = set(by_case) != set(EXPERIMENT) or min(by_case, key=by_case.get) == "case2"
@@ -216,7 +223,9 @@ def check(case, runs, base, args) -> bool:
     rows = []
     for r, (res, run_cost) in zip(results, where):
         name = f"{case.name}: {r.name}"
-        rows.append(Row(name, "efficiency factor (retained share)", f"{100 * r.efficiency:.1f} %",
+        rows.append(Row(name, "efficiency factor (retained share)", f"{100 * r.efficiency:.1f} % (area 2's lee "
+                        f"{LEE_BRACKET[0]:g} / {LEE_BRACKET[1]:g} m: {100 * r.efficiency_bracket[0]:.1f} / "
+                        f"{100 * r.efficiency_bracket[1]:.1f} %)",
                         f"{100 * r.reference:.0f} %",
                         f"[A]'s SPH at dp 5 mm (Yellin et al. 2013 experiment: {100 * r.experiment:.0f} %)",
                         res, run_cost, verdict))
