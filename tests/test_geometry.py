@@ -235,6 +235,10 @@ def test_grains_off_the_chute_are_not_retained():
     assert result.area1 == pytest.approx(0.5) and result.efficiency == pytest.approx(0.5)
     assert result.lost == pytest.approx(0.5) and result.not_retained == pytest.approx(0.5)
     assert result.fell_off == 4 and result.crossed == 0
+    end = chute_surface(chute, 3, np.array([sum(seg.length for seg in chute.segments) - 0.01]))[0]
+    fallen_off_end = dict(frame, position=np.vstack([on, end + np.array([0.05, 0.0, -0.1])] * 1 + [on[:3]]))
+    result = ob.evaluate_stake_rows(scene, [0.0], [fallen_off_end])
+    assert result.crossed == 0 and result.lost == pytest.approx(1 / 8)  # off the end, not through the bed
     departed = dict(frame, position=np.vstack([on, on]), outflow=np.array([0.0] * 4 + [1.0] * 4))
     result = ob.evaluate_stake_rows(scene, [0.0], [departed])
     assert result.efficiency == pytest.approx(0.5) and result.departed == 4 and result.fell_off == 0

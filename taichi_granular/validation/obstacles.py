@@ -8,8 +8,9 @@ Measures, from the particle positions of a run:
 - the efficiency factor of the stake rows: the mass retained on the chute in area 1 (the lower
   panel upstream of the first row, from the slope break on) plus area 2 (from the first row to
   ``LEE`` past the last one: among the rows and in their lee), over the mass of every grain.
-  A grain is on the chute when it is within its width, above its bed and still in the domain:
-  grains that fell over the sides, crossed the bed or left at an open face are not retained,
+  A grain is on the chute when it is within its width and its length, above its bed and still in
+  the domain: grains that fell over the sides or off the end, crossed the bed or left at an open
+  face are not retained,
   wherever their distance along the chute falls (they are ``lost``). [A] section 6.1.2 reports
   its SPH at dp 5 mm against Yellin et al. (2013) as [A]'s Table 1 does: area 1, area 2 and the
   rest; the case is judged against [A]'s SPH at [A]'s resolution, the experiment printed beside.
@@ -82,7 +83,7 @@ class StakeRowResult:
     area2: float
     passed: float  # beyond area 2
     upper_panel: float  # still on the first (steep) panel
-    lost: float  # mass fraction not on the chute: over its sides, through its bed, out of the domain
+    lost: float  # mass fraction not on the chute: over its sides or off its end, through its bed, out of the domain
     crossed: int  # material particles below the bed, within its width
     fell_off: int  # material particles that left the chute over its side (3D chutes without side walls)
     departed: int  # material particles taken out at an open face of the domain (off the chute's end
@@ -162,8 +163,9 @@ def evaluate_stake_rows(scene: Scene, times: Sequence[float], frames: Sequence[D
     departed = left_domain(final, n)
     beside = np.abs(final["position"][:n, 1]) > 0.5 * chute.width if scene.dimension == 3 else np.zeros(n, bool)
     beside &= ~departed
-    crossed = (height < 0.0) & ~beside & ~departed
-    on_chute = ~(beside | departed | crossed)
+    off_end = (s > sum(seg.length for seg in chute.segments)) & ~beside & ~departed  # ran off the chute's end
+    crossed = (height < 0.0) & ~beside & ~departed & ~off_end
+    on_chute = ~(beside | departed | crossed | off_end)
     mass = final["mass"][:n]
     total = mass.sum()  # every grain: the lost ones are not retained
 
